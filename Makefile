@@ -1,0 +1,29 @@
+# `make test` and `make bench` each create .venv when missing and install the
+# project into it with everything the job needs.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: test bench bench-quick lint clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
+	touch $(STAMP)
+
+test: $(STAMP)
+	$(BIN)/python -m ruff check proximity adapters benchmarks tests
+	$(BIN)/python -m pytest proximity tests README.md
+
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks
+
+bench-quick: $(STAMP)
+	$(BIN)/python -m benchmarks --quick
+
+clean:
+	rm -rf $(VENV) bench-results .pytest_cache

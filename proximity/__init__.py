@@ -1,0 +1,88 @@
+"""proximity: exact, robust and fast closest-point queries in 3D.
+
+Point-triangle, point-circle and point-disk distance, on single points and
+NumPy batches, behind one shape protocol.
+"""
+
+from .results import CircleResult, DiskResult, Feature, Result, TriangleResult
+from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle
+
+__all__ = [
+    "Circle",
+    "CircleResult",
+    "Disk",
+    "DiskResult",
+    "Feature",
+    "Result",
+    "Shape",
+    "Triangle",
+    "TriangleResult",
+    "closest_point",
+    "distance",
+]
+
+__version__ = "0.1.0"
+
+
+def _check(shape):
+    if not isinstance(shape, Shape):
+        raise TypeError(f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}")
+    return shape
+
+
+def closest_point(shape, points, *, method=DEFAULT_METHOD):
+    """Closest point on ``shape`` to each of ``points``.
+
+    Parameters
+    ----------
+    shape : Shape
+        A :class:`Triangle`, :class:`Circle` or :class:`Disk` (or a batch).
+    points : array_like, shape ``(..., D)``
+        Query points.  Their leading dimensions broadcast against the shape's
+        batch dimensions like a NumPy ufunc: ``(N, D)`` against one shape,
+        ``(N, D)`` against ``N`` shapes pairwise, ``(N, 1, D)`` against ``M``
+        shapes for all pairs.  Rows containing NaN or inf give NaN (feature
+        ``Feature.NONE``) in those rows only.
+    method : {"robust", "eberly"}, keyword-only
+        ``robust`` (default) is accurate to ``8 eps S`` on every finite input;
+        ``eberly`` is the seed's region algorithm as written, kept as a
+        baseline (NaN on zero-area triangles).
+
+    Returns
+    -------
+    TriangleResult, DiskResult or CircleResult
+        Frozen result of arrays of the broadcast shape: ``distance``,
+        ``sqr_distance``, ``point``, ``feature`` and the shape's parameters.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> r = proximity.closest_point(tri, [[2, 0, 0], [0.2, 0.2, -1], [np.nan, 0, 0]])
+    >>> r.distance.tolist()
+    [1.0, 1.0, nan]
+    >>> [proximity.Feature(f).name for f in r.feature]
+    ['VERTEX1', 'FACE', 'NONE']
+    >>> r.barycentric[1].round(6).tolist()
+    [0.6, 0.2, 0.2]
+    """
+    return _check(shape).closest_point(points, method=method)
+
+
+def distance(shape, points, *, method=DEFAULT_METHOD):
+    """Distance from each of ``points`` to ``shape``.
+
+    Parameters and broadcasting are those of :func:`closest_point`; only the
+    distances are computed and returned, as an array of the broadcast shape
+    (a NumPy scalar for one point against one shape).
+
+    Examples
+    --------
+    >>> import proximity
+    >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1)
+    >>> float(proximity.distance(disk, [0, 0, 5]))
+    5.0
+    >>> proximity.distance(disk, [[[0, 0, 1]], [[4, 0, 0]]]).shape
+    (2, 1)
+    """
+    return _check(shape).distance(points, method=method)

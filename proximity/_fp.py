@@ -1,0 +1,99 @@
+"""Floating-point building blocks for the compiled kernels.
+
+Error-free transformations (``two_product``, ``two_sum``) and the products
+built on them let the robust kernels evaluate a cross product or a dot
+product as if in twice the working precision, which is what keeps the normal
+of a sliver triangle meaningful.  Power-of-two scaling keeps squared terms
+away from overflow and underflow without adding any rounding.
+"""
+
+import math
+
+from llvmlite import ir
+from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
+
+EPS = 2.0**-52
+# Inside this window of the largest coordinate difference, no product of up
+# to four differences can overflow or lose relevant bits to underflow.
+SAFE_MIN = 2.0**-64
+SAFE_MAX = 2.0**64
+
+
+@intrinsic
+def fma(typingctx, a, b, c):
+    """Fused multiply-add ``a * b + c`` with a single rounding (LLVM ``fma``)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        double = ir.DoubleType()
+        fnty = ir.FunctionType(double, [double, double, double])
+        fn = builder.module.declare_intrinsic("llvm.fma", [double], fnty)
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+@njit(inline="always")
+def two_product(a, b):
+    """Return ``(p, e)`` with ``p = fl(a * b)`` and ``p + e == a * b`` exactly."""
+    p = a * b
+    return p, fma(a, b, -p)
+
+
+@njit(inline="always")
+def two_sum(a, b):
+    """Return ``(s, e)`` with ``s = fl(a + b)`` and ``s + e == a + b`` exactly."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+@njit(inline="always")
+def diff_of_products(a, b, c, d):
+    """``a * b - c * d`` to within about one ulp (Kahan's algorithm).
+
+    Exactly zero when ``a * b == c * d`` exactly, so an exactly collinear
+    pair of edges gives an exactly zero cross product.
+    """
+    w = c * d
+    e = fma(-c, d, w)
+    f = fma(a, b, -w)
+    return f + e
+
+
+@njit(inline="always")
+def cross_accurate(ax, ay, az, bx, by, bz):
+    """Cross product with each component correct to about one ulp."""
+    return (
+        diff_of_products(ay, bz, az, by),
+        diff_of_products(az, bx, ax, bz),
+        diff_of_products(ax, by, ay, bx),
+    )
+
+
+@njit(inline="always")
+def dot3_accurate(ax, ay, az, bx, by, bz):
+    """Dot product of 3-vectors as if computed in twice the precision (Dot2)."""
+    p, s = two_product(ax, bx)
+    h, r = two_product(ay, by)
+    p, q = two_sum(p, h)
+    s += q + r
+    h, r = two_product(az, bz)
+    p, q = two_sum(p, h)
+    s += q + r
+    return p + s
+
+
+@njit(inline="always")
+def pow2_scale(m):
+    """Power-of-two factors ``(f1, f2)`` such that ``m * f1 * f2`` lies in [0.5, 1).
+
+    Two factors because the single factor for a subnormal ``m`` would overflow.
+    Multiplying by them is exact unless the product underflows, which only
+    happens to terms that are negligible next to ``m``.
+    """
+    e = math.frexp(m)[1]
+    half = (-e) // 2
+    return math.ldexp(1.0, half), math.ldexp(1.0, -e - half)

@@ -1,0 +1,117 @@
+"""Result types of the closest-point queries.
+
+Results are frozen dataclasses of read-only arrays whose leading shape is the
+broadcast shape of the query; one point against one shape gives NumPy
+scalars (and a :class:`Feature` member).
+"""
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+
+class Feature(enum.IntEnum):
+    """The feature of a shape on which the closest point lies.
+
+    Triangles use ``VERTEX0``-``VERTEX2``, ``EDGE01``, ``EDGE12``, ``EDGE20``
+    and ``FACE``; disks ``FACE`` (the projection falls inside the disk) or
+    ``RIM``; circles ``RIM``.  ``NONE`` marks rows with no answer (a point
+    containing NaN or inf).  Feature arrays hold these codes as ``int8`` and
+    compare equal to the members.
+    """
+
+    NONE = -1
+    VERTEX0 = 0
+    VERTEX1 = 1
+    VERTEX2 = 2
+    EDGE01 = 3
+    EDGE12 = 4
+    EDGE20 = 5
+    FACE = 6
+    RIM = 7
+
+
+def _frozen(value):
+    if isinstance(value, np.ndarray):
+        if value.ndim == 0:
+            return value[()]
+        value.flags.writeable = False
+    return value
+
+
+@dataclass(frozen=True)
+class Result:
+    """Fields every query returns.
+
+    Attributes
+    ----------
+    distance : ndarray of float64, shape ``batch``
+        Euclidean distance from each point to the shape.
+    sqr_distance : ndarray of float64, shape ``batch``
+        Squared distance (over- or underflows where the distance squared is
+        outside the float64 range, even though ``distance`` does not).
+    point : ndarray of float64, shape ``batch + (D,)``
+        The closest point on the shape.
+    feature : ndarray of int8, shape ``batch``
+        :class:`Feature` code of the feature the closest point lies on.
+    """
+
+    distance: np.ndarray
+    sqr_distance: np.ndarray
+    point: np.ndarray
+    feature: np.ndarray
+
+    def __post_init__(self):
+        for name, value in vars(self).items():
+            value = _frozen(value)
+            if name == "feature" and not isinstance(value, np.ndarray):
+                value = Feature(int(value))
+            object.__setattr__(self, name, value)
+
+
+@dataclass(frozen=True)
+class TriangleResult(Result):
+    """Closest point on a triangle.
+
+    Attributes
+    ----------
+    barycentric : ndarray of float64, shape ``batch + (3,)``
+        Weights ``(b0, b1, b2)`` of the vertices, summing to 1, with
+        ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the seed's
+        notation ``(s, t) = (b1, b2)``.
+    """
+
+    barycentric: np.ndarray
+
+
+@dataclass(frozen=True)
+class DiskResult(Result):
+    """Closest point on a disk.
+
+    Attributes
+    ----------
+    height : ndarray of float64, shape ``batch``
+        Signed distance of the point from the disk's plane, along the
+        normal as given.
+    radial : ndarray of float64, shape ``batch``
+        Distance of the point from the disk's axis.
+    """
+
+    height: np.ndarray
+    radial: np.ndarray
+
+
+@dataclass(frozen=True)
+class CircleResult(DiskResult):
+    """Closest point on a circle.
+
+    Attributes
+    ----------
+    equidistant : ndarray of bool, shape ``batch``
+        True where the point lies on the circle's axis (to within the
+        rounding of ``radial``): every point of the circle is then closest,
+        and ``point`` is one of them, chosen deterministically.
+    """
+
+    equidistant: np.ndarray

@@ -1,0 +1,236 @@
+"""Shapes: thin frozen facades that validate once and call the kernels.
+
+Every shape is a batch: its data have leading *batch* dimensions, and a query
+broadcasts the points' leading dimensions against them like a NumPy ufunc.
+The kernels are imported on first use, so that ``import proximity`` does not
+pay for loading the compiler.
+"""
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ._validate import as_float64, broadcast_batch, frozen, require_finite
+from .results import CircleResult, DiskResult, Result, TriangleResult
+
+DEFAULT_METHOD = "robust"
+
+
+@runtime_checkable
+class Shape(Protocol):
+    """What every queryable shape provides.
+
+    Attributes
+    ----------
+    batch_shape : tuple of int
+        Leading dimensions of the shape's data; a single shape has ``()``.
+    dim : int
+        Dimension ``D`` of the space the shape lives in.
+    methods : tuple of str
+        The values ``method`` accepts.
+    """
+
+    batch_shape: tuple
+    dim: int
+    methods: tuple
+
+    def closest_point(self, points, *, method: str = DEFAULT_METHOD) -> Result:
+        """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
+
+    def distance(self, points, *, method: str = DEFAULT_METHOD) -> np.ndarray:
+        """Distance from each point to the shape; see :func:`proximity.distance`."""
+
+
+class _Facade:
+    """Shared query plumbing: points, method and output shape."""
+
+    __slots__ = ()
+    methods = ("eberly", "robust")
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    def _init(self, **fields):
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
+
+    def _prepare(self, points, method):
+        if method not in self.methods:
+            raise ValueError(f"method must be one of {self.methods}; got {method!r}")
+        expected = f"(..., {self.dim})"
+        points = as_float64(points, "points", expected)
+        if points.ndim == 0 or points.shape[-1] != self.dim:
+            raise ValueError(f"points must have shape {expected}; got shape {points.shape}")
+        out_shape = broadcast_batch(
+            [("points", points.shape[:-1]), (type(self).__name__.lower(), self.batch_shape)],
+            "the batch dimensions of points and shape",
+        )
+        return points, out_shape
+
+    def distance(self, points, *, method=DEFAULT_METHOD):
+        """Distance from each point to the shape; see :func:`proximity.distance`."""
+        out_shape, out = self._query(points, method, full=False)
+        return out["distance"].reshape(out_shape)[()]
+
+    def closest_point(self, points, *, method=DEFAULT_METHOD):
+        """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
+        out_shape, out = self._query(points, method, full=True)
+        fields = {}
+        for name, value in out.items():
+            value = value.reshape(out_shape + value.shape[1:])
+            if name == "point":
+                value = value[..., : self.dim]
+            fields[name] = value
+        return self._result(**fields)
+
+
+class Triangle(_Facade):
+    """A batch of triangles in 2D or 3D.
+
+    Parameters
+    ----------
+    vertices : array_like, shape ``batch + (3, D)``
+        The vertices ``V0, V1, V2`` of each triangle, finite, with D = 2 or 3.
+        Degenerate triangles (collinear or coincident vertices) are valid:
+        the ``robust`` method answers for the segment or point they are.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> r = tri.closest_point([0.25, 0.25, 2.0])
+    >>> float(r.distance), r.feature.name, r.point.tolist()
+    (2.0, 'FACE', [0.25, 0.25, 0.0])
+    >>> tri.distance([[2, 0, 0], [-1, -1, 0]]).round(6).tolist()
+    [1.0, 1.414214]
+    """
+
+    __slots__ = ("vertices", "batch_shape", "dim", "_vertices3")
+    _result = TriangleResult
+
+    def __init__(self, vertices):
+        expected = "(..., 3, D) with D = 2 or 3"
+        v = as_float64(vertices, "vertices", expected)
+        if v.ndim < 2 or v.shape[-2] != 3 or v.shape[-1] not in (2, 3):
+            raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
+        require_finite(v, "vertices")
+        v = frozen(v)
+        self._init(vertices=v, batch_shape=v.shape[:-2], dim=v.shape[-1], _vertices3=frozen(_to_3d(v)))
+
+    def __repr__(self):
+        return f"Triangle(batch_shape={self.batch_shape}, dim={self.dim})"
+
+    def _query(self, points, method, full):
+        from . import point_triangle
+
+        points, out_shape = self._prepare(points, method)
+        return out_shape, point_triangle.query(method, self._vertices3, _to_3d(points), out_shape, full)
+
+
+class _Round(_Facade):
+    __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal")
+    dim = 3
+    _is_disk = False
+
+    def __init__(self, center, normal, radius):
+        c = as_float64(center, "center", "(..., 3)")
+        n = as_float64(normal, "normal", "(..., 3)")
+        r = as_float64(radius, "radius", "(...)")
+        for name, a in (("center", c), ("normal", n)):
+            if a.ndim == 0 or a.shape[-1] != 3:
+                raise ValueError(f"{name} must have shape (..., 3); got shape {a.shape}")
+        for name, a in (("center", c), ("normal", n), ("radius", r)):
+            require_finite(a, name)
+        if (r < 0).any():
+            index = tuple(int(i) for i in np.argwhere(r < 0)[0])
+            raise ValueError(f"radius must be >= 0; got {r[index]} at index {index}")
+        if not np.any(n, axis=-1).all():
+            index = tuple(int(i) for i in np.argwhere(~np.any(n, axis=-1))[0])
+            raise ValueError(f"normal must be non-zero; got a zero vector at index {index}")
+        batch = broadcast_batch(
+            [("center", c.shape[:-1]), ("normal", n.shape[:-1]), ("radius", r.shape)],
+            "the batch dimensions of center, normal and radius",
+        )
+        self._init(
+            center=frozen(c),
+            normal=frozen(n),
+            radius=frozen(r),
+            batch_shape=batch,
+            _unit_normal=frozen(_unit(n)),
+        )
+
+    def __repr__(self):
+        return f"{type(self).__name__}(batch_shape={self.batch_shape})"
+
+    def _query(self, points, method, full):
+        from . import point_disk
+
+        points, out_shape = self._prepare(points, method)
+        out = point_disk.query(
+            self._is_disk, self.center, self._unit_normal, self.radius, points, out_shape, full
+        )
+        if self._is_disk and full:
+            del out["equidistant"]
+        return out_shape, out
+
+
+class Circle(_Round):
+    """A batch of circles in 3D.
+
+    Parameters
+    ----------
+    center : array_like, shape ``batch + (3,)``
+    normal : array_like, shape ``batch + (3,)``
+        Normal of the circle's plane, of any non-zero length: only its
+        direction matters, and its sign orients ``height``.
+    radius : array_like, shape ``batch``
+        Radius, >= 0.  The batch dimensions of the three broadcast.
+
+    Methods ``eberly`` and ``robust`` are the same computation for circles:
+    the seed's formula has no failure mode that needs a separate baseline.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> ring = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 2], radius=1.0)
+    >>> r = ring.closest_point([[3, 0, 0], [0, 0, 1]])
+    >>> r.distance.round(6).tolist(), r.equidistant.tolist()
+    ([2.0, 1.414214], [False, True])
+    """
+
+    __slots__ = ()
+    _result = CircleResult
+
+
+class Disk(_Round):
+    """A batch of disks (filled circles) in 3D.
+
+    Parameters are those of :class:`Circle`.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> plate = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> r = plate.closest_point([[0.5, 0, 2], [3, 0, 0]])
+    >>> r.distance.tolist(), [f.name for f in map(proximity.Feature, r.feature)]
+    ([2.0, 2.0], ['FACE', 'RIM'])
+    """
+
+    __slots__ = ()
+    _result = DiskResult
+    _is_disk = True
+
+
+def _to_3d(array):
+    # 2D data are embedded in the z = 0 plane, which changes no distance.
+    if array.shape[-1] == 3:
+        return array
+    return np.concatenate([array, np.zeros(array.shape[:-1] + (1,))], axis=-1)
+
+
+def _unit(normal):
+    # Scale by a power of two first (exact), so that squaring neither
+    # overflows nor underflows for lengths from 1e-300 to 1e300.
+    _, exponent = np.frexp(np.max(np.abs(normal), axis=-1, keepdims=True))
+    scaled = np.ldexp(normal, -exponent)
+    return scaled / np.sqrt(np.sum(scaled * scaled, axis=-1, keepdims=True))
