@@ -26,7 +26,9 @@ __version__ = "0.1.0"
 
 def _check(shape):
     if not isinstance(shape, Shape):
-        raise TypeError(f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}")
+        raise TypeError(
+            f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}"
+        )
     return shape
 
 

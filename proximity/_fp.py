@@ -35,14 +35,14 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def two_product(a, b):
     """Return ``(p, e)`` with ``p = fl(a * b)`` and ``p + e == a * b`` exactly."""
     p = a * b
     return p, fma(a, b, -p)
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def two_sum(a, b):
     """Return ``(s, e)`` with ``s = fl(a + b)`` and ``s + e == a + b`` exactly."""
     s = a + b
@@ -50,7 +50,7 @@ def two_sum(a, b):
     return s, (a - (s - bb)) + (b - bb)
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def diff_of_products(a, b, c, d):
     """``a * b - c * d`` to within about one ulp (Kahan's algorithm).
 
@@ -63,7 +63,7 @@ def diff_of_products(a, b, c, d):
     return f + e
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def cross_accurate(ax, ay, az, bx, by, bz):
     """Cross product with each component correct to about one ulp."""
     return (
@@ -73,7 +73,7 @@ def cross_accurate(ax, ay, az, bx, by, bz):
     )
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def dot3_accurate(ax, ay, az, bx, by, bz):
     """Dot product of 3-vectors as if computed in twice the precision (Dot2)."""
     p, s = two_product(ax, bx)
@@ -86,7 +86,7 @@ def dot3_accurate(ax, ay, az, bx, by, bz):
     return p + s
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def pow2_scale(m):
     """Power-of-two factors ``(f1, f2)`` such that ``m * f1 * f2`` lies in [0.5, 1).
 

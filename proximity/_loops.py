@@ -53,20 +53,19 @@ def loop_views(out_shape, inputs):
         strides = [v.strides[axis] for v in full]
         if merged:
             outer, outer_strides = merged[-1]
-            if all(so == s * length for so, s in zip(outer_strides, strides)):
+            if all(so == s * length for so, s in zip(outer_strides, strides, strict=True)):
                 merged[-1] = (outer * length, strides)
                 continue
         merged.append((length, strides))
     if len(merged) > 2:
         # An unusual broadcast pattern: copy, after which everything merges.
         contiguous = [np.ascontiguousarray(v) for v in full]
-        return loop_views(out_shape, [(a, c) for a, (_, c) in zip(contiguous, inputs)])
+        return loop_views(out_shape, [(a, c) for a, (_, c) in zip(contiguous, inputs, strict=True)])
     while len(merged) < 2:
         merged.insert(0, (1, [0] * len(full)))
     (n_i, s_i), (n_j, s_j) = merged
     views = [
         as_strided(v, shape=(n_i, n_j) + v.shape[nb:], strides=(si, sj) + v.strides[nb:], writeable=False)
-        for v, si, sj in zip(full, s_i, s_j)
+        for v, si, sj in zip(full, s_i, s_j, strict=True)
     ]
     return views, n_j
-

@@ -7,17 +7,27 @@ circle's plane.  The closest point is ``X = C + R (Q - C) / |Q - C|``, and
 when ``Q == C`` every circle point is closest, at distance
 ``sqrt(R^2 + |P - C|^2)``.
 
-Robustness
-----------
-The distance is not taken as ``|P - X|``, which subtracts two absolute
-points, but from the decomposition of ``D = P - C`` into a height
-``h = N . D`` and a radial part ``Q - C = D - h N`` of length ``q``:
-``d = sqrt(h^2 + (q - R)^2)``.  Each term has an absolute error of a few
-``eps * (|D| + R)``, and ``d`` is 1-Lipschitz in ``q``, so near the axis,
-where the direction of ``Q - C`` is lost to rounding, the distance is still
-accurate.  Differences whose size lies outside ``[2^-64, 2^64]`` are scaled
-by a power of two first, so ``h^2`` and ``(q - R)^2`` neither overflow nor
-underflow.  Normals of any length are normalised once, at construction.
+Two methods:
+
+``eberly``
+    The section as written: ``Q``, then ``X``, then ``|P - X|``, with the
+    normal normalised as ``N / |N|``.  It is the baseline.  It loses the
+    distance to cancellation when ``P`` and ``X`` are large absolute points
+    close together (offset circles), returns NaN where ``|N|^2`` or
+    ``|Q - C|^2`` over- or underflows, and near the axis takes the direction
+    of ``Q - C`` from rounding noise.
+
+``robust``
+    The distance is not taken as ``|P - X|`` but from the decomposition of
+    ``D = P - C`` into a height ``h = N . D`` and a radial part
+    ``Q - C = D - h N`` of length ``q``: ``d = sqrt(h^2 + (q - R)^2)``.  Each
+    term has an absolute error of a few ``eps * (|D| + R)``, and ``d`` is
+    1-Lipschitz in ``q``, so near the axis, where the direction of ``Q - C``
+    is lost to rounding, the distance is still accurate.  Differences whose
+    size lies outside ``[2^-64, 2^64]`` are scaled by a power of two first,
+    so ``h^2`` and ``(q - R)^2`` neither overflow nor underflow.  Normals of
+    any length are normalised once, at construction, the same way.  The
+    result satisfies ``|d - d*| <= 8 eps (|P - C| + R)``.
 """
 
 import math
@@ -31,36 +41,53 @@ from ._fp import EPS, SAFE_MAX, SAFE_MIN, pow2_scale
 AXIS_TOLERANCE = 8.0 * EPS
 
 
-@njit(inline="always")
-def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
-    """Height and radial part of ``P - C`` in a scaled frame.
+@njit(inline="always", error_model="numpy")
+def window(dx, dy, dz, r):
+    """Largest of the differences and the radius, and whether it is in the safe window."""
+    m = max(max(abs(dx), abs(dy)), max(abs(dz), r))
+    return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
-    Returns ``(h, qx, qy, qz, q, r, g, on_axis)``: everything but ``g`` is
-    multiplied by a power of two ``1 / g`` chosen so that no squared term
-    over- or underflows, and ``on_axis`` says whether ``q`` is within its
-    rounding error of zero.
+
+@njit(inline="always", error_model="numpy")
+def decompose_local(dx, dy, dz, ux, uy, uz):
+    """Height and radial part of ``D = P - C``, for ``D`` in the safe window.
+
+    Returns ``(h, qx, qy, qz, q, on_axis)`` where ``on_axis`` says whether
+    ``q`` is within its rounding error of zero.
+    """
+    h = ux * dx + uy * dy + uz * dz
+    qx, qy, qz = dx - h * ux, dy - h * uy, dz - h * uz
+    q = math.sqrt(qx * qx + qy * qy + qz * qz)
+    on_axis = q <= AXIS_TOLERANCE * math.sqrt(dx * dx + dy * dy + dz * dz)
+    return h, qx, qy, qz, q, on_axis
+
+
+@njit(inline="always", error_model="numpy")
+def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
+    """:func:`decompose_local` for any finite input, in a scaled frame.
+
+    Returns ``(h, qx, qy, qz, q, on_axis, r, g)``: lengths are multiplied by
+    a power of two ``1 / g`` chosen so that no squared term over- or
+    underflows.
     """
     dx, dy, dz = px - cx, py - cy, pz - cz
-    m = max(abs(dx), abs(dy), abs(dz), r)
+    m, _ = window(dx, dy, dz, r)
     g = 1.0
     if m > 1.7e308:
         # A difference of two finite coordinates overflowed: quarter first.
         dx, dy, dz = px * 0.25 - cx * 0.25, py * 0.25 - cy * 0.25, pz * 0.25 - cz * 0.25
         r = r * 0.25
-        m = max(abs(dx), abs(dy), abs(dz), r)
+        m, _ = window(dx, dy, dz, r)
         g = 4.0
     if m < SAFE_MIN or m > SAFE_MAX:
         f1, f2 = pow2_scale(m)
         dx, dy, dz, r = dx * f1 * f2, dy * f1 * f2, dz * f1 * f2, r * f1 * f2
         g = g / f1 / f2
-    h = ux * dx + uy * dy + uz * dz
-    qx, qy, qz = dx - h * ux, dy - h * uy, dz - h * uz
-    q = math.sqrt(qx * qx + qy * qy + qz * qz)
-    on_axis = q <= AXIS_TOLERANCE * math.sqrt(dx * dx + dy * dy + dz * dz)
-    return h, qx, qy, qz, q, r, g, on_axis
+    h, qx, qy, qz, q, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+    return h, qx, qy, qz, q, on_axis, r, g
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis):
     """Unit vector from the center towards the closest rim point.
 
@@ -68,34 +95,61 @@ def rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis):
     perpendicular to the normal's smallest component, so that the answer does
     not depend on rounding noise.
     """
-    if not on_axis:
-        return qx / q, qy / q, qz / q
     ax, ay, az = abs(ux), abs(uy), abs(uz)
-    if ax <= ay and ax <= az:
-        wx, wy, wz = 0.0, uz, -uy
-    elif ay <= az:
-        wx, wy, wz = -uz, 0.0, ux
-    else:
-        wx, wy, wz = uy, -ux, 0.0
+    x_least = (ax <= ay) & (ax <= az)
+    y_least = (not x_least) & (ay <= az)
+    wx = 0.0 if x_least else (-uz if y_least else uy)
+    wy = uz if x_least else (0.0 if y_least else -ux)
+    wz = -uy if x_least else (ux if y_least else 0.0)
     w = math.sqrt(wx * wx + wy * wy + wz * wz)
-    return wx / w, wy / w, wz / w
+    q = max(q, 5e-324)
+    return (
+        wx / w if on_axis else qx / q,
+        wy / w if on_axis else qy / q,
+        wz / w if on_axis else qz / q,
+    )
 
 
-@njit(inline="always")
-def rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, r, g, on_axis):
-    """Closest rim point from a decomposition; ``(distance, sqr, x, y, z)``."""
+@njit(inline="always", error_model="numpy")
+def rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
+    """Closest rim point from a decomposition: ``(distance, sqr, x, y, z)``."""
     wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
     dr = q - r
     sqr = h * h + dr * dr
     return math.sqrt(sqr) * g, sqr * g * g, cx + radius * wx, cy + radius * wy, cz + radius * wz
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
-    """Point-circle query.
+    """Robust point-circle query for any finite input.
 
     Returns ``(distance, sqr_distance, x, y, z, equidistant, height, radial)``.
     """
-    h, qx, qy, qz, q, r, g, on_axis = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-    d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, r, g, on_axis)
+    h, qx, qy, qz, q, on_axis, r, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+    d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
     return d, sqr, x, y, z, on_axis, h * g, q * g
+
+
+@njit(inline="always", error_model="numpy")
+def seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
+    """The seed's ``N`` (normalised as given) and ``Q - C``, as written."""
+    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+    nx, ny, nz = nx / length, ny / length, nz / length
+    h = nx * (px - cx) + ny * (py - cy) + nz * (pz - cz)
+    qx, qy, qz = px - h * nx - cx, py - h * ny - cy, pz - h * nz - cz
+    return nx, ny, nz, h, qx, qy, qz, math.sqrt(qx * qx + qy * qy + qz * qz)
+
+
+@njit(inline="always", error_model="numpy")
+def seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
+    """Section 1 as written; same return as :func:`circle`."""
+    nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
+    on_axis = q == 0.0
+    dx, dy, dz = px - cx, py - cy, pz - cz
+    x = cx + radius * qx / q
+    y = cy + radius * qy / q
+    z = cz + radius * qz / q
+    sqr = (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
+    if on_axis:
+        sqr = radius * radius + dx * dx + dy * dy + dz * dz
+    return math.sqrt(sqr), sqr, x, y, z, on_axis, h, q

@@ -3,9 +3,9 @@
 Implements Section 2 of D. Eberly, *Distance Between Point and Circle or Disk
 in 3D*: if the projection ``Q`` of ``P`` onto the disk's plane lies in the
 disk it is the closest point, otherwise the closest point is on the rim, a
-circle.  It reuses the height/radial decomposition of :mod:`.point_circle`,
-so the same error bound holds; a point whose radial distance is within
-rounding of ``R`` can be classified either way at a cost below that bound.
+circle.  Both methods reuse those of :mod:`.point_circle`, so the same error
+bound holds for ``robust``; a point whose radial distance is within rounding
+of ``R`` can be classified either way at a cost below that bound.
 
 The batch kernel here serves circles too: a circle query is a disk query that
 always takes the rim branch.
@@ -18,76 +18,179 @@ from numba import njit, prange
 from numba.core import types
 
 from ._loops import A_IN2, A_IN3, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
-from .point_circle import circle, decompose, rim
+from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
 from .results import Feature
 
 NONE = int(Feature.NONE)
 FACE = int(Feature.FACE)
 RIM = int(Feature.RIM)
 
+EBERLY = 0
+ROBUST = 1
+METHODS = {"eberly": EBERLY, "robust": ROBUST}
+
+
+@njit(inline="always", error_model="numpy")
+def _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
+    """Face or rim, from a decomposition; the query's full return tuple."""
+    d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
+    if q <= r:
+        return abs(h) * g, h * h * g * g, cx + qx * g, cy + qy * g, cz + qz * g, FACE, False, h * g, q * g
+    return d, sqr, x, y, z, RIM, False, h * g, q * g
+
+
+@njit(inline="always", error_model="numpy")
+def disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
+    """Robust point-disk query for any finite input.
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, equidistant, height,
+    radial)``, with ``equidistant`` always False.
+    """
+    h, qx, qy, qz, q, on_axis, r, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+    return _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
+
+
+@njit(inline="always", error_model="numpy")
+def seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
+    """Section 2 as written; same return as :func:`disk`."""
+    nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
+    if q <= radius:
+        x, y, z = cx + qx, cy + qy, cz + qz
+        sqr = (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
+        return math.sqrt(sqr), sqr, x, y, z, FACE, False, h, q
+    d, sqr, x, y, z, _, h, q = seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+    return d, sqr, x, y, z, RIM, False, h, q
+
+
+@njit(inline="always", error_model="numpy")
+def _query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """One query on the scalar path; ``(d, sqr, x, y, z, feature, equidistant, h, q)``."""
+    if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+        nan = math.nan
+        return nan, nan, nan, nan, nan, NONE, False, nan, nan
+    if method == ROBUST:
+        if is_disk:
+            return disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        d, sqr, x, y, z, e, h, q = circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        return d, sqr, x, y, z, RIM, e, h, q
+    if is_disk:
+        return seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+    d, sqr, x, y, z, e, h, q = seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+    return d, sqr, x, y, z, RIM, e, h, q
+
 
 @njit(inline="always")
-def disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
-    """Point-disk query.
-
-    Returns ``(distance, sqr_distance, x, y, z, feature, height, radial)``.
-    """
-    h, qx, qy, qz, q, r, g, on_axis = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-    if q <= r:
-        return abs(h) * g, h * h * g * g, cx + qx * g, cy + qy * g, cz + qz * g, FACE, h * g, q * g
-    d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, r, g, on_axis)
-    return d, sqr, x, y, z, RIM, h * g, q * g
+def _store(r, q, res):
+    r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
 
 
+BLOCK = 128  # queries gathered into structure-of-arrays form at a time
 _SIGNATURE = types.void(
-    types.boolean, A_IN3, A_IN3, A_IN2, A_IN3, types.int64,
-    OUT1, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, OUT1, OUT1, types.boolean,
+    types.int64,
+    types.boolean,
+    A_IN3,
+    A_IN3,
+    A_IN3,
+    A_IN2,
+    A_IN3,
+    types.int64,
+    OUT1,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT_FLAG,
+    OUT1,
+    OUT1,
+    types.boolean,
 )
 
 
-@njit(_SIGNATURE, parallel=True, cache=True)
-def _batch(is_disk, C, U, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, full):
+@njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
+def _batch(method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
-    ``C``, ``U`` (unit normals) and ``P`` are ``(I, J, 3)``, ``R`` is
-    ``(I, J)``, any strides.  With ``full=False`` only ``dist`` is written.
+    ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
+    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
+    only ``dist`` is written.  As for triangles, queries are gathered in
+    blocks so that the robust core runs as SIMD code, and rows outside its
+    safe window are redone on the scalar path.
     """
-    for k in prange(dist.shape[0]):
-        i = k // n_j
-        j = k - i * n_j
-        px, py, pz = P[i, j, 0], P[i, j, 1], P[i, j, 2]
-        if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-            dist[k] = math.nan
-            if full:
-                sqr[k] = point[k, 0] = point[k, 1] = point[k, 2] = math.nan
-                height[k] = radial[k] = math.nan
-                feature[k] = NONE
-                equidistant[k] = False
-            continue
-        cx, cy, cz = C[i, j, 0], C[i, j, 1], C[i, j, 2]
-        ux, uy, uz = U[i, j, 0], U[i, j, 1], U[i, j, 2]
-        if is_disk:
-            d, s, x, y, z, f, h, q = disk(cx, cy, cz, ux, uy, uz, R[i, j], px, py, pz)
-            e = False
+    n = dist.shape[0]
+    for block in prange((n + BLOCK - 1) // BLOCK):
+        k0 = block * BLOCK
+        nb = min(BLOCK, n - k0)
+        a = np.empty((13, BLOCK))
+        r = np.empty((10, BLOCK))
+        i = k0 // n_j
+        j = k0 - i * n_j
+        for q in range(nb):
+            for c in range(3):
+                a[c, q] = C[i, j, c]
+                a[3 + c, q] = U[i, j, c]
+                a[6 + c, q] = P[i, j, c]
+            a[9, q] = R[i, j]
+            j += 1
+            if j == n_j:
+                i += 1
+                j = 0
+        if method == ROBUST:
+            for q in range(nb):
+                cx, cy, cz, ux, uy, uz = a[0, q], a[1, q], a[2, q], a[3, q], a[4, q], a[5, q]
+                dx, dy, dz, radius = a[6, q] - cx, a[7, q] - cy, a[8, q] - cz, a[9, q]
+                _, ok = window(dx, dy, dz, radius)
+                h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+                res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+                if not is_disk:
+                    d, s, x, y, z = rim(
+                        cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0
+                    )
+                    res = (d, s, x, y, z, RIM, on_axis, h, qq)
+                _store(r, q, res)
+                r[9, q] = ok
         else:
-            d, s, x, y, z, e, h, q = circle(cx, cy, cz, ux, uy, uz, R[i, j], px, py, pz)
-            f = RIM
-        dist[k] = d
-        if full:
-            sqr[k] = s
-            point[k, 0] = x
-            point[k, 1] = y
-            point[k, 2] = z
-            feature[k] = f
-            equidistant[k] = e
-            height[k] = h
-            radial[k] = q
+            r[9, :nb] = 0.0
+        for q in range(nb):
+            if r[9, q] != 0.0:
+                continue
+            k = k0 + q
+            ii = k // n_j
+            jj = k - ii * n_j
+            res = _query(
+                method,
+                is_disk,
+                a[0, q],
+                a[1, q],
+                a[2, q],
+                a[3, q],
+                a[4, q],
+                a[5, q],
+                N[ii, jj, 0],
+                N[ii, jj, 1],
+                N[ii, jj, 2],
+                a[9, q],
+                a[6, q],
+                a[7, q],
+                a[8, q],
+            )
+            _store(r, q, res)
+        for q in range(nb):
+            k = k0 + q
+            dist[k] = r[0, q]
+            if full:
+                sqr[k] = r[1, q]
+                point[k, 0] = r[2, q]
+                point[k, 1] = r[3, q]
+                point[k, 2] = r[4, q]
+                feature[k] = np.int8(r[5, q])
+                equidistant[k] = r[6, q] != 0.0
+                height[k] = r[7, q]
+                radial[k] = r[8, q]
 
 
-def query(is_disk, center, unit_normal, radius, points, out_shape, full):
+def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):
     """Run the batch kernel; inputs are validated float64 arrays."""
-    (C, U, R, P), n_j = loop_views(
-        out_shape, [(center, 1), (unit_normal, 1), (radius, 0), (points, 1)]
+    (C, U, N, R, P), n_j = loop_views(
+        out_shape, [(center, 1), (unit_normal, 1), (normal, 1), (radius, 0), (points, 1)]
     )
     n = C.shape[0] * C.shape[1]
     m = n if full else 0
@@ -100,5 +203,5 @@ def query(is_disk, center, unit_normal, radius, points, out_shape, full):
         height=np.empty(m),
         radial=np.empty(m),
     )
-    _batch(is_disk, C, U, R, P, n_j, *out.values(), full)
+    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, *out.values(), full)
     return out

@@ -69,12 +69,14 @@ EDGE12 = int(Feature.EDGE12)
 EDGE20 = int(Feature.EDGE20)
 FACE = int(Feature.FACE)
 
+TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
+
 EBERLY = 0
 ROBUST = 1
 METHODS = {"eberly": EBERLY, "robust": ROBUST}
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eberly(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     """Listings 1-8 of the seed, for ``T(s, t) = B + s E0 + t E1``.
 
@@ -189,7 +191,84 @@ def eberly(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     return s, t, _boundary_feature(s, t)
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
+def eberly_select(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
+    """:func:`eberly` with its branches turned into selects, for SIMD loops.
+
+    Every listing's arithmetic is kept operation for operation: the same
+    predicates pick the region and the clamps, and the value that a listing
+    divides is divided here with the same operands.  Only the order of
+    evaluation differs (all candidates are computed, one is kept), so the
+    results are bit-identical to :func:`eberly`; ``tests/`` checks that.
+    """
+    dx = bx - px
+    dy = by - py
+    dz = bz - pz
+    a = e0x * e0x + e0y * e0y + e0z * e0z
+    b = e0x * e1x + e0y * e1y + e0z * e1z
+    c = e1x * e1x + e1y * e1y + e1z * e1z
+    d = e0x * dx + e0y * dy + e0z * dz
+    e = e1x * dx + e1y * dy + e1z * dz
+    det = abs(a * c - b * b)
+    s = b * e - c * d
+    t = b * d - a * e
+
+    # Listing 1
+    inner = s + t <= det
+    s_neg = s < 0.0
+    t_neg = t < 0.0
+    r0 = inner & (not s_neg) & (not t_neg)
+    r1 = (not inner) & (not s_neg) & (not t_neg)
+    r2 = (not inner) & s_neg
+    r3 = inner & s_neg & (not t_neg)
+    r4 = inner & s_neg & t_neg
+    r6 = (not inner) & (not s_neg) & t_neg  # region 5 is what remains
+
+    denom = a - 2.0 * b + c
+    numer_s = (c + e) - (b + d)  # Listings 3 and 6: s on the edge s + t = 1
+    numer_t = (a + d) - (b + e)  # Listing 7: t on the edge s + t = 1
+    s_side = r1 | (r2 & (c + e > b + d))
+    t_side = r6 & (a + d > b + e)
+    # Which edges of the domain the remaining regions end on (Listings 4-8).
+    s_zero = r3 | (r4 & (not (d < 0.0))) | (r2 & (not s_side))
+    # The one division of the boundary cases, with the listing's operands.
+    numer = numer_s if s_side else (numer_t if t_side else (-e if s_zero else -d))
+    denom_q = denom if (s_side | t_side) else (c if s_zero else a)
+    quotient = numer / denom_q
+
+    # s + t = 1, solving for s (Listings 3 and 6).
+    s_edge = 0.0 if (r1 & (numer_s <= 0.0)) else (1.0 if numer_s >= denom else quotient)
+    # s + t = 1, solving for t (Listing 7).
+    t_edge = 1.0 if numer_t >= denom else quotient
+    # s = 0 (Listings 4, 6 and 8).
+    tmp1_2 = c + e
+    t_s0 = 0.0 if e >= 0.0 else (1.0 if -e >= c else quotient)
+    t_s0 = (1.0 if tmp1_2 <= 0.0 else (0.0 if e >= 0.0 else quotient)) if r2 else t_s0
+    # t = 0 (Listings 5, 7 and 8).
+    tmp1_6 = a + d
+    s_t0 = 0.0 if d >= 0.0 else (1.0 if -d >= a else quotient)
+    s_t0 = (1.0 if -d >= a else quotient) if r4 else s_t0
+    s_t0 = (1.0 if tmp1_6 <= 0.0 else (0.0 if d >= 0.0 else quotient)) if r6 else s_t0
+
+    if r0:
+        s_out = s / det
+        t_out = t / det
+    elif s_side:
+        s_out = s_edge
+        t_out = 1.0 - s_edge
+    elif t_side:
+        t_out = t_edge
+        s_out = 1.0 - t_edge
+    elif s_zero:
+        s_out = 0.0
+        t_out = t_s0
+    else:
+        s_out = s_t0
+        t_out = 0.0
+    return s_out, t_out, FACE if r0 else _boundary_feature(s_out, t_out)
+
+
+@njit(inline="always", error_model="numpy")
 def _boundary_feature(s, t):
     # The listings leave (s, t) on an edge of the domain; name that edge, or
     # the vertex where the clamp put it.
@@ -206,191 +285,175 @@ def _boundary_feature(s, t):
     return EDGE12
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def _segment(ax, ay, az, ex, ey, ez, bx, by, bz):
     """Closest point to the origin on the segment from ``a`` to ``b = a + e``.
 
-    Returns ``(sqr_distance, x, y, z, t)``.  The parameter is clamped before
-    any division, so a zero-length segment is its point.  The closest point is
-    formed from the nearer endpoint, which halves its rounding.
+    Returns ``(sqr_distance, x, y, z, t)``.  The parameter is clamped after a
+    division that cannot produce NaN (a zero-length segment has a zero
+    numerator), so a degenerate segment is its point.  The closest point is
+    formed from the nearer endpoint, which halves its rounding and makes the
+    endpoints exact.  Written with selects rather than branches: which case
+    applies is unpredictable from one query to the next.
     """
     numer = -(ax * ex + ay * ey + az * ez)
     denom = ex * ex + ey * ey + ez * ez
-    if numer <= 0.0:
-        t = 0.0
-        x, y, z = ax, ay, az
-    elif numer >= denom:
-        t = 1.0
-        x, y, z = bx, by, bz
-    else:
-        t = numer / denom
-        if t <= 0.5:
-            x, y, z = ax + t * ex, ay + t * ey, az + t * ez
-        else:
-            u = t - 1.0
-            x, y, z = bx + u * ex, by + u * ey, bz + u * ez
+    t = min(max(numer / max(denom, TINY), 0.0), 1.0)
+    near_b = t > 0.5
+    u = t - 1.0 if near_b else t
+    x = (bx if near_b else ax) + u * ex
+    y = (by if near_b else ay) + u * ey
+    z = (bz if near_b else az) + u * ez
     return x * x + y * y + z * z, x, y, z, t
 
 
-@njit(inline="always")
+@njit(inline="always", error_model="numpy")
 def _edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
     # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.
-    return (
-        nx * (vy * ez - vz * ey)
-        + ny * (vz * ex - vx * ez)
-        + nz * (vx * ey - vy * ex)
+    return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)
+
+
+@njit(inline="always", error_model="numpy")
+def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
+    """The robust minimisation on vertices relative to ``P``, in the safe window.
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with
+    ``(x, y, z)`` relative to ``P``.  Every candidate (face and three edges)
+    is evaluated and the answer selected without branches, so the loop that
+    calls this compiles to SIMD code.
+    """
+    e0x, e0y, e0z = bx - ax, by - ay, bz - az
+    e1x, e1y, e1z = cx - ax, cy - ay, cz - az
+    e2x, e2y, e2z = cx - bx, cy - by, cz - bz
+
+    # Face: the projection of P is inside when all three edge functions are
+    # positive, which needs a non-zero normal.
+    nx, ny, nz = cross_accurate(e0x, e0y, e0z, e1x, e1y, e1z)
+    nn = nx * nx + ny * ny + nz * nz
+    wc = _edge_function(nx, ny, nz, ax, ay, az, e0x, e0y, e0z)
+    wa = _edge_function(nx, ny, nz, bx, by, bz, e2x, e2y, e2z)
+    wb = -_edge_function(nx, ny, nz, cx, cy, cz, e1x, e1y, e1z)
+    inside = (wa > 0.0) & (wb > 0.0) & (wc > 0.0)
+    na = dot3_accurate(nx, ny, nz, ax, ay, az)
+    nn_safe = max(nn, TINY)
+    k = na / nn_safe
+    face_dist = abs(na) / math.sqrt(nn_safe)
+    w = max(wa + wb + wc, TINY)
+
+    # Edges V0V1, V1V2, V2V0; ties go to the earlier edge.
+    d1, x1, y1, z1, t1 = _segment(ax, ay, az, e0x, e0y, e0z, bx, by, bz)
+    d2, x2, y2, z2, t2 = _segment(bx, by, bz, e2x, e2y, e2z, cx, cy, cz)
+    d3, x3, y3, z3, t3 = _segment(cx, cy, cz, -e1x, -e1y, -e1z, ax, ay, az)
+    on2 = d2 < d1
+    best = d2 if on2 else d1
+    on3 = d3 < best
+    best = d3 if on3 else best
+    on1 = not (on2 | on3)
+    on2 = on2 & (not on3)
+
+    if inside:
+        return face_dist, face_dist * face_dist, k * nx, k * ny, k * nz, FACE, wa / w, wb / w, wc / w
+    t = t1 if on1 else (t2 if on2 else t3)
+    feature = EDGE01 if on1 else (EDGE12 if on2 else EDGE20)
+    start = VERTEX0 if on1 else (VERTEX1 if on2 else VERTEX2)
+    end = VERTEX1 if on1 else (VERTEX2 if on2 else VERTEX0)
+    feature = start if t == 0.0 else (end if t == 1.0 else feature)
+    b0 = 1.0 - t1 if on1 else (0.0 if on2 else t3)
+    b1 = t1 if on1 else (1.0 - t2 if on2 else 0.0)
+    b2 = 0.0 if on1 else (t2 if on2 else 1.0 - t3)
+    x = x1 if on1 else (x2 if on2 else x3)
+    y = y1 if on1 else (y2 if on2 else y3)
+    z = z1 if on1 else (z2 if on2 else z3)
+    return math.sqrt(best), best, x, y, z, feature, b0, b1, b2
+
+
+@njit(inline="always", error_model="numpy")
+def _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """Undo the scaling ``g`` and make the closest point absolute.
+
+    A vertex is reported exactly, not as ``P + (V - P)``.
+    """
+    dist, sqr, x, y, z, feature, b0, b1, b2 = r
+    x = px + x * g
+    y = py + y * g
+    z = pz + z * g
+    if feature == VERTEX0:
+        x, y, z = v0x, v0y, v0z
+    if feature == VERTEX1:
+        x, y, z = v1x, v1y, v1z
+    if feature == VERTEX2:
+        x, y, z = v2x, v2y, v2z
+    return dist * g, sqr * g * g, x, y, z, feature, b0, b1, b2
+
+
+@njit(inline="always", error_model="numpy")
+def _window(ax, ay, az, bx, by, bz, cx, cy, cz):
+    """Largest difference, and whether it is inside the safe window."""
+    m = max(
+        max(max(abs(ax), abs(ay)), max(abs(az), abs(bx))),
+        max(max(abs(by), abs(bz)), max(max(abs(cx), abs(cy)), abs(cz))),
     )
+    return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
-    """Robust point-triangle query; see the module docstring.
+    """Robust point-triangle query for any finite input; see the module docstring.
 
     Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` where
     ``(x, y, z)`` is the closest point and ``b*`` are its barycentric
     coordinates.
     """
-    ax = v0x - px
-    ay = v0y - py
-    az = v0z - pz
-    bx = v1x - px
-    by = v1y - py
-    bz = v1z - pz
-    cx = v2x - px
-    cy = v2y - py
-    cz = v2z - pz
-    m = max(abs(ax), abs(ay), abs(az), abs(bx), abs(by), abs(bz), abs(cx), abs(cy), abs(cz))
+    ax, ay, az = v0x - px, v0y - py, v0z - pz
+    bx, by, bz = v1x - px, v1y - py, v1z - pz
+    cx, cy, cz = v2x - px, v2y - py, v2z - pz
+    m, _ = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
     g = 1.0  # undoes the scaling of the differences
     if m > 1.7e308:
-        # A difference of two finite coordinates overflowed: halve twice first.
+        # A difference of two finite coordinates overflowed: quarter first.
         q = 0.25
         ax, ay, az = v0x * q - px * q, v0y * q - py * q, v0z * q - pz * q
         bx, by, bz = v1x * q - px * q, v1y * q - py * q, v1z * q - pz * q
         cx, cy, cz = v2x * q - px * q, v2y * q - py * q, v2z * q - pz * q
-        m = max(abs(ax), abs(ay), abs(az), abs(bx), abs(by), abs(bz), abs(cx), abs(cy), abs(cz))
+        m, _ = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
         g = 4.0
     if m == 0.0:
         return 0.0, 0.0, v0x, v0y, v0z, VERTEX0, 1.0, 0.0, 0.0
-    g1 = 1.0
-    g2 = 1.0
     if m < SAFE_MIN or m > SAFE_MAX:
         f1, f2 = pow2_scale(m)
         ax, ay, az = ax * f1 * f2, ay * f1 * f2, az * f1 * f2
         bx, by, bz = bx * f1 * f2, by * f1 * f2, bz * f1 * f2
         cx, cy, cz = cx * f1 * f2, cy * f1 * f2, cz * f1 * f2
-        g1 = 1.0 / f1
-        g2 = 1.0 / f2
-    g1 *= g
+        g = g / f1 / f2
+    r = _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz)
+    return _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
 
-    e0x, e0y, e0z = bx - ax, by - ay, bz - az
-    e1x, e1y, e1z = cx - ax, cy - ay, cz - az
-    e2x, e2y, e2z = cx - bx, cy - by, cz - bz
 
-    nx, ny, nz = cross_accurate(e0x, e0y, e0z, e1x, e1y, e1z)
-    nn = nx * nx + ny * ny + nz * nz
-    if nn > 0.0:
-        wc = _edge_function(nx, ny, nz, ax, ay, az, e0x, e0y, e0z)
-        wa = _edge_function(nx, ny, nz, bx, by, bz, e2x, e2y, e2z)
-        wb = -_edge_function(nx, ny, nz, cx, cy, cz, e1x, e1y, e1z)
-        if wa > 0.0 and wb > 0.0 and wc > 0.0:
-            na = dot3_accurate(nx, ny, nz, ax, ay, az)
-            k = na / nn
-            dist = abs(na) / math.sqrt(nn)
-            w = wa + wb + wc
-            return (
-                dist * g1 * g2,
-                dist * dist * g1 * g1 * g2 * g2,
-                px + k * nx * g1 * g2,
-                py + k * ny * g1 * g2,
-                pz + k * nz * g1 * g2,
-                FACE,
-                wa / w,
-                wb / w,
-                wc / w,
-            )
-
-    best, x, y, z, t = _segment(ax, ay, az, e0x, e0y, e0z, bx, by, bz)
-    feature = EDGE01
-    b0 = 1.0 - t
-    b1 = t
-    b2 = 0.0
-    if t == 0.0:
-        feature = VERTEX0
-    elif t == 1.0:
-        feature = VERTEX1
-    d2, x2, y2, z2, t2 = _segment(bx, by, bz, e2x, e2y, e2z, cx, cy, cz)
-    if d2 < best:
-        best, x, y, z = d2, x2, y2, z2
-        feature = EDGE12
-        b0 = 0.0
-        b1 = 1.0 - t2
-        b2 = t2
-        if t2 == 0.0:
-            feature = VERTEX1
-        elif t2 == 1.0:
-            feature = VERTEX2
-    d2, x2, y2, z2, t2 = _segment(cx, cy, cz, -e1x, -e1y, -e1z, ax, ay, az)
-    if d2 < best:
-        best, x, y, z = d2, x2, y2, z2
-        feature = EDGE20
-        b0 = t2
-        b1 = 0.0
-        b2 = 1.0 - t2
-        if t2 == 0.0:
-            feature = VERTEX2
-        elif t2 == 1.0:
-            feature = VERTEX0
-    # A vertex is reported exactly; other points relative to P.
-    if feature == VERTEX0:
-        x, y, z = v0x, v0y, v0z
-    elif feature == VERTEX1:
-        x, y, z = v1x, v1y, v1z
-    elif feature == VERTEX2:
-        x, y, z = v2x, v2y, v2z
-    else:
-        x, y, z = px + x * g1 * g2, py + y * g1 * g2, pz + z * g1 * g2
-    return (
-        math.sqrt(best) * g1 * g2,
-        best * g1 * g1 * g2 * g2,
-        x,
-        y,
-        z,
-        feature,
-        b0,
-        b1,
-        b2,
-    )
+@njit(inline="always", error_model="numpy")
+def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """The seed's method with the closest point and distance formed as in its source."""
+    e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
+    e1x, e1y, e1z = v2x - v0x, v2y - v0y, v2z - v0z
+    s, t, feature = eberly_select(v0x, v0y, v0z, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz)
+    x = v0x + s * e0x + t * e1x
+    y = v0y + s * e0y + t * e1y
+    z = v0z + s * e0z + t * e1z
+    sqr = (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
+    return math.sqrt(sqr), sqr, x, y, z, feature, 1.0 - s - t, s, t
 
 
 @njit(inline="always")
-def _query(method, V, P, i, j):
-    """One query of the batch; returns the same tuple as :func:`robust`."""
-    px, py, pz = P[i, j, 0], P[i, j, 1], P[i, j, 2]
-    if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-        nan = math.nan
-        return nan, nan, nan, nan, nan, NONE, nan, nan, nan
-    v0x, v0y, v0z = V[i, j, 0, 0], V[i, j, 0, 1], V[i, j, 0, 2]
-    v1x, v1y, v1z = V[i, j, 1, 0], V[i, j, 1, 1], V[i, j, 1, 2]
-    v2x, v2y, v2z = V[i, j, 2, 0], V[i, j, 2, 1], V[i, j, 2, 2]
-    if method == EBERLY:
-        e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
-        e1x, e1y, e1z = v2x - v0x, v2y - v0y, v2z - v0z
-        s, t, feature = eberly(v0x, v0y, v0z, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz)
-        # The closest point and the distance as the seed's source forms them.
-        x = v0x + s * e0x + t * e1x
-        y = v0y + s * e0y + t * e1y
-        z = v0z + s * e0z + t * e1z
-        sqr = (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
-        return math.sqrt(sqr), sqr, x, y, z, feature, 1.0 - s - t, s, t
-    return robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+def _store(r, q, res):
+    r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
 
 
+BLOCK = 128  # queries gathered into structure-of-arrays form at a time
 _SIGNATURE = types.void(
     types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, types.boolean
 )
 
 
-@njit(_SIGNATURE, parallel=True, cache=True)
+@njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
 def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
@@ -398,21 +461,109 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
     (zero along broadcast dimensions); output row ``k`` is loop index
     ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and the
     other outputs may be empty.
+
+    Queries are processed in blocks: gathered into contiguous rows, so that
+    the robust core runs as SIMD code over the block, then scattered.  Rows
+    that the core cannot take (differences outside the safe window, or a
+    non-finite point) are redone one by one on the scalar path.
     """
-    for k in prange(dist.shape[0]):
-        i = k // n_j
-        j = k - i * n_j
-        r = _query(method, V, P, i, j)
-        dist[k] = r[0]
-        if full:
-            sqr[k] = r[1]
-            point[k, 0] = r[2]
-            point[k, 1] = r[3]
-            point[k, 2] = r[4]
-            feature[k] = r[5]
-            bary[k, 0] = r[6]
-            bary[k, 1] = r[7]
-            bary[k, 2] = r[8]
+    n = dist.shape[0]
+    for block in prange((n + BLOCK - 1) // BLOCK):
+        k0 = block * BLOCK
+        nb = min(BLOCK, n - k0)
+        a = np.empty((12, BLOCK))
+        r = np.empty((10, BLOCK))
+        i = k0 // n_j
+        j = k0 - i * n_j
+        for q in range(nb):
+            for c in range(3):
+                for v in range(3):
+                    a[3 * v + c, q] = V[i, j, v, c]
+                a[9 + c, q] = P[i, j, c]
+            j += 1
+            if j == n_j:
+                i += 1
+                j = 0
+        if method == ROBUST:
+            for q in range(nb):
+                px, py, pz = a[9, q], a[10, q], a[11, q]
+                ax, ay, az = a[0, q] - px, a[1, q] - py, a[2, q] - pz
+                bx, by, bz = a[3, q] - px, a[4, q] - py, a[5, q] - pz
+                cx, cy, cz = a[6, q] - px, a[7, q] - py, a[8, q] - pz
+                _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
+                res = _finish(
+                    _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
+                    1.0,
+                    a[0, q],
+                    a[1, q],
+                    a[2, q],
+                    a[3, q],
+                    a[4, q],
+                    a[5, q],
+                    a[6, q],
+                    a[7, q],
+                    a[8, q],
+                    px,
+                    py,
+                    pz,
+                )
+                _store(r, q, res)
+                r[9, q] = ok
+        else:
+            for q in range(nb):
+                _store(
+                    r,
+                    q,
+                    _eberly_query(
+                        a[0, q],
+                        a[1, q],
+                        a[2, q],
+                        a[3, q],
+                        a[4, q],
+                        a[5, q],
+                        a[6, q],
+                        a[7, q],
+                        a[8, q],
+                        a[9, q],
+                        a[10, q],
+                        a[11, q],
+                    ),
+                )
+                r[9, q] = math.isfinite(a[9, q]) & math.isfinite(a[10, q]) & math.isfinite(a[11, q])
+        for q in range(nb):
+            if r[9, q] != 0.0:
+                continue
+            px, py, pz = a[9, q], a[10, q], a[11, q]
+            if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+                res = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
+            else:
+                res = robust(
+                    a[0, q],
+                    a[1, q],
+                    a[2, q],
+                    a[3, q],
+                    a[4, q],
+                    a[5, q],
+                    a[6, q],
+                    a[7, q],
+                    a[8, q],
+                    px,
+                    py,
+                    pz,
+                )
+            _store(r, q, res)
+        for q in range(nb):
+            k = k0 + q
+            dist[k] = r[0, q]
+            if full:
+                sqr[k] = r[1, q]
+                point[k, 0] = r[2, q]
+                point[k, 1] = r[3, q]
+                point[k, 2] = r[4, q]
+                feature[k] = np.int8(r[5, q])
+                bary[k, 0] = r[6, q]
+                bary[k, 1] = r[7, q]
+                bary[k, 2] = r[8, q]
 
 
 def query(method, vertices, points, out_shape, full):

@@ -69,6 +69,20 @@ class Result:
                 value = Feature(int(value))
             object.__setattr__(self, name, value)
 
+    def __getitem__(self, index):
+        """The results of the queries at ``index`` of the batch.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> r = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).closest_point([[2, 0, 0], [0, 0, 3]])
+        >>> r[1].feature, float(r[1].distance)
+        (<Feature.VERTEX0: 0>, 3.0)
+        """
+        if np.ndim(self.distance) == 0:
+            raise IndexError("a single query's result has no batch to index")
+        return type(self)(**{name: value[index] for name, value in vars(self).items()})
+
 
 @dataclass(frozen=True)
 class TriangleResult(Result):
@@ -79,7 +93,10 @@ class TriangleResult(Result):
     barycentric : ndarray of float64, shape ``batch + (3,)``
         Weights ``(b0, b1, b2)`` of the vertices, summing to 1, with
         ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the seed's
-        notation ``(s, t) = (b1, b2)``.
+        notation ``(s, t) = (b1, b2)``.  On the face of a sliver of height
+        ``h`` they are determined only to about ``eps * S / h`` (points that
+        close together have barycentrics that far apart); ``point`` and
+        ``distance`` keep their accuracy there.
     """
 
     barycentric: np.ndarray

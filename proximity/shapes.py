@@ -167,7 +167,15 @@ class _Round(_Facade):
 
         points, out_shape = self._prepare(points, method)
         out = point_disk.query(
-            self._is_disk, self.center, self._unit_normal, self.radius, points, out_shape, full
+            method,
+            self._is_disk,
+            self.center,
+            self._unit_normal,
+            self.normal,
+            self.radius,
+            points,
+            out_shape,
+            full,
         )
         if self._is_disk and full:
             del out["equidistant"]
@@ -186,8 +194,9 @@ class Circle(_Round):
     radius : array_like, shape ``batch``
         Radius, >= 0.  The batch dimensions of the three broadcast.
 
-    Methods ``eberly`` and ``robust`` are the same computation for circles:
-    the seed's formula has no failure mode that needs a separate baseline.
+    Method ``robust`` (default) decomposes ``P - C`` into height and radial
+    terms and is accurate to ``8 eps (|P - C| + R)``; ``eberly`` is the
+    seed's formula as written, kept as a baseline.
 
     Examples
     --------

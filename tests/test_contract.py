@@ -69,7 +69,9 @@ def make_single(shape, index):
     b = np.broadcast_to
     batch = shape.batch_shape
     return type(shape)(
-        b(shape.center, batch + (3,))[index], b(shape.normal, batch + (3,))[index], b(shape.radius, batch)[index]
+        b(shape.center, batch + (3,))[index],
+        b(shape.normal, batch + (3,))[index],
+        b(shape.radius, batch)[index],
     )
 
 
@@ -128,7 +130,9 @@ def test_non_finite_points_give_nan_rows_only(kind, method):
     clean = shape.closest_point(points[:1], method=method)
     r = shape.closest_point(points, method=method)
     assert r.distance[0] == clean.distance[0]
-    assert np.isnan(r.distance[1:]).all() and np.isnan(r.point[1:]).all() and np.isnan(r.sqr_distance[1:]).all()
+    assert (
+        np.isnan(r.distance[1:]).all() and np.isnan(r.point[1:]).all() and np.isnan(r.sqr_distance[1:]).all()
+    )
     assert (r.feature[1:] == Feature.NONE).all()
     assert np.isnan(shape.distance(points, method=method)[1:]).all()
 
@@ -147,18 +151,30 @@ def test_shape_data_are_frozen_copies():
 @pytest.mark.parametrize(
     "build, match",
     [
-        (lambda: Triangle([[0, 0, 0], [1, 0, 0]]), r"vertices must have shape \(\.\.\., 3, D\).*got shape \(2, 3\)"),
+        (
+            lambda: Triangle([[0, 0, 0], [1, 0, 0]]),
+            r"vertices must have shape \(\.\.\., 3, D\).*got shape \(2, 3\)",
+        ),
         (lambda: Triangle(np.zeros((3, 4))), r"vertices must have shape .*got shape \(3, 4\)"),
         (lambda: Triangle(np.zeros((3, 1))), r"vertices must have shape .*got shape \(3, 1\)"),
         (lambda: Triangle(np.zeros(3)), r"vertices must have shape .*got shape \(3,\)"),
-        (lambda: Triangle([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]]), r"vertices must be finite; got nan at index \(1, 1\)"),
+        (
+            lambda: Triangle([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]]),
+            r"vertices must be finite; got nan at index \(1, 1\)",
+        ),
         (lambda: Triangle([[0, 0, 0], [1, 0, 0], [0, np.inf, 0]]), r"vertices must be finite"),
         (lambda: Triangle([["a", "b", "c"]] * 3), r"vertices must be a real numeric array"),
         (lambda: Triangle(np.zeros((3, 3), complex)), r"vertices must be a real numeric array.*complex"),
         (lambda: Triangle([[0, 0], [1, 0, 0], [0, 1]]), r"vertices must be an array of shape"),
         (lambda: Circle([0, 0], [0, 0, 1], 1), r"center must have shape \(\.\.\., 3\); got shape \(2,\)"),
-        (lambda: Circle([0, 0, 0], [0, 0, 0], 1), r"normal must be non-zero; got a zero vector at index \(\)"),
-        (lambda: Disk([0, 0, 0], [[0, 0, 1], [0, 0, 0]], 1), r"normal must be non-zero; got a zero vector at index \(1,\)"),
+        (
+            lambda: Circle([0, 0, 0], [0, 0, 0], 1),
+            r"normal must be non-zero; got a zero vector at index \(\)",
+        ),
+        (
+            lambda: Disk([0, 0, 0], [[0, 0, 1], [0, 0, 0]], 1),
+            r"normal must be non-zero; got a zero vector at index \(1,\)",
+        ),
         (lambda: Disk([0, 0, 0], [0, 0, 1], -1.0), r"radius must be >= 0; got -1.0"),
         (lambda: Disk([0, 0, 0], [0, 0, 1], np.nan), r"radius must be finite"),
         (lambda: Circle([0, np.inf, 0], [0, 0, 1], 1), r"center must be finite"),
@@ -174,7 +190,9 @@ def test_bad_shape_data_raise_at_construction(build, match):
 def test_bad_points_and_methods(kind):
     shape = make(kind, (3,))
     dim = shape.dim
-    with pytest.raises(ValueError, match=rf"points must have shape \(\.\.\., {dim}\); got shape \(3, {dim + 1}\)"):
+    with pytest.raises(
+        ValueError, match=rf"points must have shape \(\.\.\., {dim}\); got shape \(3, {dim + 1}\)"
+    ):
         shape.distance(np.zeros((3, dim + 1)))
     with pytest.raises(ValueError, match=r"points must have shape"):
         shape.distance(1.0)
