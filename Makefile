@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: test bench bench-quick lint clean
+.PHONY: test bench bench-quick clean clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)

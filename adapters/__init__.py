@@ -1,0 +1,108 @@
+"""Other libraries' closest-point answers, behind proximity's query interface.
+
+Each backend wraps one library (python-fcl, trimesh, pybullet), builds the
+smallest native model that answers the query, and returns proximity's own
+result types.  Answers that the library gives in its own conventions
+(sentinels, missing results, contact where there is none, nearest points off
+the shape) are translated to NaN with a :class:`Failure` code per row, so
+that comparisons across libraries mean something.  :func:`cross_check` asks
+them all and proximity itself, and summarises the disagreements.
+
+Examples
+--------
+>>> import adapters, proximity
+>>> names = adapters.available()     # those whose library is installed
+>>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+>>> with adapters.get("trimesh") as backend:     # a fan of K triangles, K from the tolerance
+...     r = backend.closest_point(disk, [[0.5, 0.0, 2.0], [3.0, 0.0, 0.0]])
+>>> r.distance.round(4).tolist(), int(r.model.segments), round(float(r.model.bound), 6)
+([2.0, 2.0004], 71, 0.000979)
+"""
+
+import importlib
+
+from ._base import BackendResult, Failure, Model, segments_for
+from .crosscheck import Case, CrossCheck, Summary, cross_check
+
+__all__ = [
+    "BackendResult",
+    "Case",
+    "CrossCheck",
+    "Failure",
+    "Model",
+    "NAMES",
+    "Summary",
+    "available",
+    "cross_check",
+    "get",
+    "segments_for",
+]
+
+#: Backend name -> (module, class).  Modules import their library only when
+#: a backend is created or :func:`available` probes for it.
+_REGISTRY = {
+    "fcl": ("fcl_backend", "FclBackend"),
+    "trimesh": ("trimesh_backend", "TrimeshBackend"),
+    "pybullet": ("pybullet_backend", "PybulletBackend"),
+}
+
+#: Every backend name, whether or not its library is installed here.
+NAMES = tuple(_REGISTRY)
+
+
+def _module(name):
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown backend {name!r}; expected one of {NAMES}")
+    return importlib.import_module(f".{_REGISTRY[name][0]}", __name__)
+
+
+def available():
+    """Names of the backends whose library can be imported here.
+
+    Only ``ImportError`` counts as "not installed": any other error while
+    importing a library propagates.
+
+    Returns
+    -------
+    list of str
+        A subset of :data:`NAMES`, in that order.
+    """
+    names = []
+    for name in NAMES:
+        # The adapter module itself must import: only its library may be missing.
+        module = _module(name)
+        try:
+            module.load()
+        except ImportError:
+            continue
+        names.append(name)
+    return names
+
+
+def get(name, **options):
+    """A new backend for library ``name``.
+
+    Parameters
+    ----------
+    name : {"fcl", "trimesh", "pybullet"}
+    **options
+        Passed to the backend's constructor (``rescale`` for trimesh).
+
+    Returns
+    -------
+    Backend
+        With ``closest_point(shape, points, *, tol=None)`` and
+        ``distance(shape, points, *, tol=None)``.  Close it (or use it as a
+        context manager) to release what the library holds; pybullet
+        backends own a physics client.
+
+    Raises
+    ------
+    ImportError
+        If the library is not installed; the message names the extra to
+        install: ``pip install 'proximity[adapters]'``.
+    ValueError
+        For an unknown name.
+    """
+    module = _module(name)
+    return getattr(module, _REGISTRY[name][1])(**options)

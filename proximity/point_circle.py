@@ -57,6 +57,11 @@ def decompose_local(dx, dy, dz, ux, uy, uz):
     """
     h = ux * dx + uy * dy + uz * dz
     qx, qy, qz = dx - h * ux, dy - h * uy, dz - h * uz
+    # The subtraction leaves a component along N of up to eps * |h|; near the
+    # axis that is a large part of Q - C and would tilt the rim direction out
+    # of the plane, so remove it once more.
+    c = ux * qx + uy * qy + uz * qz
+    qx, qy, qz = qx - c * ux, qy - c * uy, qz - c * uz
     q = math.sqrt(qx * qx + qy * qy + qz * qz)
     on_axis = q <= AXIS_TOLERANCE * math.sqrt(dx * dx + dy * dy + dz * dz)
     return h, qx, qy, qz, q, on_axis

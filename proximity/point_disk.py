@@ -79,6 +79,17 @@ def _query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, 
     return d, sqr, x, y, z, RIM, e, h, q
 
 
+@njit(cache=True, error_model="numpy")
+def single(out, method, s, p):
+    """One query, written to ``out[:9]``: the fast path for one point and one shape.
+
+    ``s`` holds ``(is_disk, center, unit normal, normal, radius)`` flattened.
+    """
+    out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _query(
+        method, s[0] != 0.0, s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], p[0], p[1], p[2]
+    )
+
+
 @njit(inline="always")
 def _store(r, q, res):
     r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res

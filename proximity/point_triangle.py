@@ -442,6 +442,26 @@ def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return math.sqrt(sqr), sqr, x, y, z, feature, 1.0 - s - t, s, t
 
 
+@njit(cache=True, error_model="numpy")
+def single(out, method, v, p):
+    """One query, written to ``out[:9]``: the fast path for one point and one shape.
+
+    ``v`` holds the nine vertex coordinates and ``p`` the point.
+    """
+    px, py, pz = p[0], p[1], p[2]
+    if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+        out[:] = math.nan
+        out[5] = NONE
+    elif method == ROBUST:
+        out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = robust(
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
+        )
+    else:
+        out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _eberly_query(
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
+        )
+
+
 @njit(inline="always")
 def _store(r, q, res):
     r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res

@@ -32,6 +32,9 @@ class Feature(enum.IntEnum):
     RIM = 7
 
 
+_FEATURES = list(Feature)  # indexed by code + 1
+
+
 def _frozen(value):
     if isinstance(value, np.ndarray):
         if value.ndim == 0:
@@ -69,6 +72,21 @@ class Result:
                 value = Feature(int(value))
             object.__setattr__(self, name, value)
 
+    @classmethod
+    def _from_row(cls, row):
+        """The result of one query from the fast path's nine values.
+
+        ``row`` is a read-only float64 array: ``(distance, sqr_distance, x, y,
+        z, feature)`` and three shape-specific values.  Building the instance
+        directly skips the per-field conversions, which would cost more than
+        the query itself.
+        """
+        result = object.__new__(cls)
+        result.__dict__.update(
+            distance=row[0], sqr_distance=row[1], point=row[2:5], feature=_FEATURES[int(row[5]) + 1]
+        )
+        return result
+
     def __getitem__(self, index):
         """The results of the queries at ``index`` of the batch.
 
@@ -101,6 +119,18 @@ class TriangleResult(Result):
 
     barycentric: np.ndarray
 
+    @classmethod
+    def _from_row(cls, row):
+        result = object.__new__(cls)
+        result.__dict__.update(
+            distance=row[0],
+            sqr_distance=row[1],
+            point=row[2:5],
+            feature=_FEATURES[int(row[5]) + 1],
+            barycentric=row[6:9],
+        )
+        return result
+
 
 @dataclass(frozen=True)
 class DiskResult(Result):
@@ -117,6 +147,22 @@ class DiskResult(Result):
 
     height: np.ndarray
     radial: np.ndarray
+
+    @classmethod
+    def _from_row(cls, row):
+        result = object.__new__(cls)
+        result.__dict__.update(
+            distance=row[0],
+            sqr_distance=row[1],
+            point=row[2:5],
+            feature=_FEATURES[int(row[5]) + 1],
+            height=row[7],
+            radial=row[8],
+            equidistant=row[6] != 0.0,
+        )
+        if cls is DiskResult:
+            del result.__dict__["equidistant"]
+        return result
 
 
 @dataclass(frozen=True)

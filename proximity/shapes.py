@@ -6,6 +6,7 @@ The kernels are imported on first use, so that ``import proximity`` does not
 pay for loading the compiler.
 """
 
+import importlib
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -14,6 +15,7 @@ from ._validate import as_float64, broadcast_batch, frozen, require_finite
 from .results import CircleResult, DiskResult, Result, TriangleResult
 
 DEFAULT_METHOD = "robust"
+_FLOAT64 = np.dtype(np.float64)
 
 
 @runtime_checkable
@@ -46,6 +48,7 @@ class _Facade:
 
     __slots__ = ()
     methods = ("eberly", "robust")
+    _method_codes = {"eberly": 0, "robust": 1}
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable")
@@ -67,13 +70,67 @@ class _Facade:
         )
         return points, out_shape
 
+    def _single(self, points, method):
+        """The fast path: a row of nine values for one 3D point against a
+        single shape, or None when the query is not that.
+
+        A drop-in narrow phase calls the query once per pair from Python, so
+        this path hands plain arrays straight to the one-query kernel and
+        skips validation of the shape (done at construction), broadcasting
+        and the batch kernel's thread launch.
+        """
+        if self._args is None:
+            return None
+        code = self._method_codes.get(method)
+        if code is None:
+            return None
+        if type(points) is not np.ndarray or points.dtype is not _FLOAT64:
+            try:
+                points = np.asarray(points, dtype=np.float64)
+            except (TypeError, ValueError):
+                return None  # the batch path explains what is wrong with the input
+        if points.shape != (3,):
+            return None
+        kernel = self._single_kernel
+        if kernel is None:
+            kernel = importlib.import_module(self._kernel_module).single
+            # A compiled function binds like a method, hence staticmethod.
+            type(self)._single_kernel = staticmethod(kernel)
+        row = np.empty(9)
+        kernel(row, code, self._args, points)
+        row.setflags(write=False)
+        return row
+
     def distance(self, points, *, method=DEFAULT_METHOD):
         """Distance from each point to the shape; see :func:`proximity.distance`."""
+        row = self._single(points, method)
+        if row is not None:
+            return row[0]
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
     def closest_point(self, points, *, method=DEFAULT_METHOD):
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
+        # One float64 point against a single shape is the drop-in narrow-phase
+        # call, made once per pair from Python; it is :meth:`_single` written
+        # out, because at a few microseconds a call every frame counts.
+        kernel = self._single_kernel
+        code = self._method_codes.get(method)
+        if (
+            kernel is not None
+            and self._args is not None
+            and code is not None
+            and type(points) is np.ndarray
+            and points.dtype is _FLOAT64
+            and points.shape == (3,)
+        ):
+            row = np.empty(9)
+            kernel(row, code, self._args, points)
+            row.setflags(write=False)
+            return self._result._from_row(row)
+        row = self._single(points, method)
+        if row is not None:
+            return self._result._from_row(row)
         out_shape, out = self._query(points, method, full=True)
         fields = {}
         for name, value in out.items():
@@ -105,7 +162,7 @@ class Triangle(_Facade):
     [1.0, 1.414214]
     """
 
-    __slots__ = ("vertices", "batch_shape", "dim", "_vertices3")
+    __slots__ = ("vertices", "batch_shape", "dim", "_vertices3", "_args")
     _result = TriangleResult
 
     def __init__(self, vertices):
@@ -115,7 +172,18 @@ class Triangle(_Facade):
             raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
         require_finite(v, "vertices")
         v = frozen(v)
-        self._init(vertices=v, batch_shape=v.shape[:-2], dim=v.shape[-1], _vertices3=frozen(_to_3d(v)))
+        v3 = frozen(_to_3d(v))
+        single = v.shape == (3, 3)
+        self._init(
+            vertices=v,
+            batch_shape=v.shape[:-2],
+            dim=v.shape[-1],
+            _vertices3=v3,
+            _args=v3.ravel() if single else None,
+        )
+
+    _kernel_module = "proximity.point_triangle"
+    _single_kernel = None  # loaded on first use
 
     def __repr__(self):
         return f"Triangle(batch_shape={self.batch_shape}, dim={self.dim})"
@@ -128,9 +196,12 @@ class Triangle(_Facade):
 
 
 class _Round(_Facade):
-    __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal")
+    __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal", "_args")
     dim = 3
     _is_disk = False
+
+    _kernel_module = "proximity.point_disk"
+    _single_kernel = None  # loaded on first use
 
     def __init__(self, center, normal, radius):
         c = as_float64(center, "center", "(..., 3)")
@@ -151,12 +222,17 @@ class _Round(_Facade):
             [("center", c.shape[:-1]), ("normal", n.shape[:-1]), ("radius", r.shape)],
             "the batch dimensions of center, normal and radius",
         )
+        u = _unit(n)
+        args = None
+        if batch == ():
+            args = frozen(np.concatenate([[float(self._is_disk)], c, u, n, [r]]))
         self._init(
             center=frozen(c),
             normal=frozen(n),
             radius=frozen(r),
             batch_shape=batch,
-            _unit_normal=frozen(_unit(n)),
+            _unit_normal=frozen(u),
+            _args=args,
         )
 
     def __repr__(self):

@@ -217,3 +217,25 @@ def test_method_is_keyword_only():
 def test_shapes_follow_the_protocol():
     for kind in KINDS:
         assert isinstance(make(kind), proximity.Shape)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("kind", ["triangle", "circle", "disk"])
+def test_single_point_fast_path_matches_the_batch_path(kind, method):
+    """One point against one shape takes a separate path; its answers are the batch's."""
+    shape = make(kind)
+    points = points_for(shape, (50,), seed=3)
+    points[7] = [np.nan, 0.0, 0.0]
+    points[8] = shape.vertices[1] if kind == "triangle" else shape.center
+    batch = shape.closest_point(points, method=method)
+    for k, p in enumerate(points):
+        strided = np.stack([p, p], axis=1)[:, 0]  # a non-contiguous view
+        for query in (p, tuple(p), list(p), strided):
+            single = shape.closest_point(query, method=method)
+            expected = batch[k]
+            assert type(single) is type(expected)
+            for name, value in vars(expected).items():
+                np.testing.assert_array_equal(getattr(single, name), value, err_msg=name)
+            assert not single.point.flags.writeable
+            assert isinstance(single.feature, Feature)
+            np.testing.assert_array_equal(shape.distance(query, method=method), expected.distance)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from proximity import Circle, Disk, Feature
 from tests import exact, strategies
@@ -106,3 +107,22 @@ def test_rigid_motion(kind, scene, motion):
             + np.max(np.abs(motion.translation))
         )
         assert abs(moved[k] - d[k]) <= 2 * BOUND * EPS * scale + 16 * EPS * (size + scene.radius[k])
+
+
+@pytest.mark.parametrize("kind", sorted(SHAPES))
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=strategies.SEEDS,
+    rel=strategies.powers_of_ten(-16, -10),
+    height=st.floats(-10.0, 10.0, allow_nan=False),
+)
+def test_near_the_axis_with_any_normal(kind, seed, rel, height):
+    """Just off the axis of a tilted circle, where Q - C is mostly rounding."""
+    rng = np.random.default_rng(seed)
+    center, normal = rng.normal(size=3), rng.normal(size=3) * 10.0 ** rng.uniform(-3, 3)
+    unit = normal / np.linalg.norm(normal)
+    side = np.cross(unit, rng.normal(size=3))
+    point = center + height * unit + rel * (abs(height) + 1.0) * side / np.linalg.norm(side)
+    radius = float(rng.uniform(0.1, 3.0))
+    r = SHAPES[kind](center, normal, radius).closest_point(point)
+    check_round(kind, center, normal, radius, point, r)

@@ -1,0 +1,658 @@
+"""What every backend shares: failure codes, model descriptions, results and the translation.
+
+A backend asks its library one question per query row and hands back the
+library's raw answer (a distance, a nearest point, or a library-level failure
+such as "no result" or a sentinel).  :meth:`Backend.closest_point` then turns
+that into proximity's own result type, checking each answer against the
+geometry with proximity's most accurate method, so that contradictions become
+NaN with a reason instead of numbers that look like answers.
+
+Every tolerance here is relative: a row's tolerance is the Hausdorff distance
+between the shape and the model the library was given (zero for an exact
+primitive) plus ``rtol * (S + M)``, where ``S`` is the scale proximity's own
+bound uses (``max_i |P - V_i|`` for a triangle, ``|P - C| + R`` for a disk or
+circle) and ``M`` the largest coordinate magnitude of the point and the shape,
+since a library that returns absolute coordinates cannot round them to
+better than ``eps * M``.
+"""
+
+import enum
+import functools
+import importlib
+import importlib.metadata
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+import proximity
+from proximity import Circle, Disk, Feature, Triangle
+from proximity.results import CircleResult, DiskResult, TriangleResult
+
+EPS = float(np.finfo(np.float64).eps)
+
+#: Default modelling tolerance of tessellated shapes, relative to the radius.
+DEFAULT_RELATIVE_TOL = 1e-3
+
+#: Most segments a circle or disk may be cut into; a tolerance that needs more
+#: is refused rather than silently loosened.
+MAX_SEGMENTS = 1 << 16
+
+INSTALL_HINT = "pip install 'proximity[adapters]'"
+
+
+class Failure(enum.IntEnum):
+    """Why a backend row has no answer.
+
+    Failure arrays hold these codes as ``int8``.  Every row whose code is not
+    ``OK`` has NaN in all float fields of the result and ``Feature.NONE``.
+    """
+
+    #: The library answered, and the answer is consistent with the geometry.
+    OK = 0
+    #: The query point contains NaN or inf; the library was not asked.
+    NAN_INPUT = 1
+    #: The library returned nothing (pybullet's empty list for degenerate triangles).
+    NO_RESULT = 2
+    #: The library returned a value that is not a distance: fcl's sentinel -1
+    #: in contact, 1.797e308 for an unsupported pair, or any distance below
+    #: minus the row's tolerance (none of these shapes has an inside).
+    SENTINEL = 3
+    #: The library reported contact (a distance within the row's tolerance
+    #: of 0) where proximity puts the shape more than twice the tolerance away.
+    FALSE_TOUCHING = 4
+    #: The returned nearest point is farther from the shape than the tolerance.
+    POINT_OFF_SHAPE = 5
+    #: The returned nearest point is not at the returned distance from the
+    #: query point (to within the tolerance).
+    INCONSISTENT = 6
+    #: The library raised an error while building the model or answering.
+    EXCEPTION = 7
+
+
+@dataclass(frozen=True)
+class Model:
+    """What a backend built to answer a query.
+
+    Attributes
+    ----------
+    library : str
+        Distribution and version, e.g. ``"python-fcl 0.7.0.11"``.
+    primitive : str
+        The native model of one shape, e.g. ``"Cylinder(R, 0)"``.
+    probe : str
+        How the query point was given to the library.
+    segments : ndarray of int64, shape ``batch``
+        Number of segments ``K`` of each tessellated shape; 0 where the
+        library was given an exact primitive.
+    bound : ndarray of float64, shape ``batch``
+        Hausdorff distance between each shape and its model: the sagitta
+        ``R (1 - cos(pi / K))`` of a tessellated circle or disk, 0 otherwise.
+        It bounds the modelling part of every distance error.
+    margin : float
+        Collision margin in effect, in the caller's length unit, as read back
+        from the library; NaN for libraries without margins.
+    rtol : float
+        Relative accuracy the backend documents for the library's arithmetic.
+    frame : str
+        Coordinates the library worked in.
+    """
+
+    library: str
+    primitive: str
+    probe: str
+    segments: np.ndarray
+    bound: np.ndarray
+    margin: float
+    rtol: float
+    frame: str
+
+    def __post_init__(self):
+        for name in ("segments", "bound"):
+            value = getattr(self, name)
+            value.flags.writeable = False
+
+    def describe(self):
+        """One line: primitive, segments, margin and bound."""
+        parts = [self.primitive]
+        if self.segments.size and self.segments.max() > 0:
+            low, high = int(self.segments.min()), int(self.segments.max())
+            parts.append(f"K={low}" if low == high else f"K={low}..{high}")
+            parts.append(f"bound<={float(self.bound.max()):.2g}")
+        if not np.isnan(self.margin):
+            parts.append(f"margin={self.margin:g}")
+        return ", ".join(parts)
+
+
+@dataclass(frozen=True)
+class BackendResult:
+    """A backend's answer, in proximity's result type, with the translation record.
+
+    The fields of :attr:`result` can be read directly from this object
+    (``r.distance`` is ``r.result.distance``).
+
+    Attributes
+    ----------
+    result : TriangleResult, DiskResult or CircleResult
+        The same type proximity returns, of the broadcast shape.  Rows whose
+        failure is not ``OK`` are NaN; fields listed in :attr:`unknown` are
+        not given by the library: ``Feature.NONE`` for ``feature``, NaN for
+        float parameters and False for ``equidistant``.
+    failure : ndarray of int8, shape ``batch``
+        :class:`Failure` code of each row.
+    tolerance : ndarray of float64, shape ``batch``
+        The error the backend documents for each row (see the module
+        docstring); NaN where the point is not finite.
+    model : Model
+        What was built.
+    unknown : tuple of str
+        Fields of :attr:`result` the library cannot give.
+    backend : str
+        Name of the backend that answered.
+    """
+
+    result: object
+    failure: np.ndarray
+    tolerance: np.ndarray
+    model: Model
+    unknown: tuple
+    backend: str
+
+    def __post_init__(self):
+        for name in ("failure", "tolerance"):
+            value = getattr(self, name)
+            if isinstance(value, np.ndarray):
+                if value.ndim == 0:
+                    value = value[()]
+                else:
+                    value.flags.writeable = False
+            if name == "failure" and not isinstance(value, np.ndarray):
+                value = Failure(int(value))
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name):
+        # Only the result's own fields are forwarded, so that typos and
+        # protocol probes (copy, pickle) still raise AttributeError.
+        result = self.__dict__.get("result")
+        if result is not None and name in {f.name for f in fields(result)}:
+            return getattr(result, name)
+        raise AttributeError(f"{type(self).__name__!s} has no attribute {name!r}")
+
+    @property
+    def ok(self):
+        """Boolean array: True where the library's answer was kept."""
+        return np.asarray(self.failure) == Failure.OK
+
+
+def import_library(module, distribution):
+    """Import ``module`` or raise an ImportError that names the extra to install."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        raise ImportError(
+            f"{distribution} is not installed (module {module!r} cannot be imported): {INSTALL_HINT}",
+            name=module,
+        ) from exc
+
+
+@functools.cache
+def library_version(distribution):
+    """``"name version"`` of an installed distribution."""
+    try:
+        return f"{distribution} {importlib.metadata.version(distribution)}"
+    except importlib.metadata.PackageNotFoundError:
+        return distribution
+
+
+def best_method(shape):
+    """The most accurate method ``shape`` offers: ``certified``, else ``robust``."""
+    for method in ("certified", "robust"):
+        if method in shape.methods:
+            return method
+    raise ValueError(f"{shape!r} offers neither 'certified' nor 'robust' methods: {shape.methods}")
+
+
+def sagitta(radius, segments):
+    """``R (1 - cos(pi / K))``, written as ``2 R sin^2(pi / 2K)`` to avoid cancellation."""
+    s = np.sin(np.pi / (2.0 * np.asarray(segments, dtype=np.float64)))
+    return 2.0 * np.asarray(radius, dtype=np.float64) * s * s
+
+
+def segments_for(radius, tol=None):
+    """Fewest segments ``K >= 3`` whose sagitta ``R (1 - cos(pi/K))`` is at most ``tol``.
+
+    Parameters
+    ----------
+    radius : array_like
+        Radii, >= 0.
+    tol : float, optional
+        Largest Hausdorff distance allowed between a circle (or disk) and the
+        inscribed polygon, in the caller's length unit.  Default
+        ``1e-3 * radius``, per shape.
+
+    Returns
+    -------
+    ndarray of int64
+        ``K`` for each radius.
+
+    Examples
+    --------
+    >>> segments_for([1.0, 2.0]).tolist()
+    [71, 71]
+    >>> segments_for([1.0, 2.0], tol=1e-3).tolist()
+    [71, 100]
+    """
+    radius = np.asarray(radius, dtype=np.float64)
+    if tol is None:
+        limit = DEFAULT_RELATIVE_TOL * radius
+    else:
+        tol = float(tol)
+        if not (tol > 0 and np.isfinite(tol)):
+            raise ValueError(f"tol must be a positive finite length; got {tol!r}")
+        limit = np.broadcast_to(tol, radius.shape)
+    positive = radius > 0
+    ratio = np.where(positive, limit / np.where(positive, 2.0 * radius, 1.0), 1.0)
+    # R (1 - cos(pi/K)) = 2 R sin^2(pi/2K) <= tol  <=>  K >= pi / (2 asin(sqrt(tol / 2R))).
+    with np.errstate(divide="ignore"):
+        guess = np.ceil(np.pi / (2.0 * np.arcsin(np.sqrt(np.minimum(ratio, 1.0)))))
+    k = np.where(positive, np.maximum(guess, 3), 3)
+    if (k > MAX_SEGMENTS).any():
+        i = int(np.argmax(k))
+        raise ValueError(
+            f"tol={float(np.ravel(limit)[i])!r} needs more than {MAX_SEGMENTS} segments for radius "
+            f"{float(np.ravel(radius)[i])!r}; pass a larger tol"
+        )
+    k = k.astype(np.int64)
+    # The closed form is exact up to rounding of arcsin; settle the last step
+    # on the bound itself, so that K is the smallest that meets it.
+    while True:
+        too_few = positive & (sagitta(radius, k) > limit)
+        if not too_few.any():
+            break
+        k = k + too_few
+    while True:
+        fewer = positive & (k > 3) & (sagitta(radius, np.maximum(k - 1, 3)) <= limit)
+        if not fewer.any():
+            break
+        k = k - fewer
+    return k
+
+
+def plane_frame(unit_normal):
+    """Unit vectors ``u, v`` with ``(u, v, n)`` a right-handed orthonormal frame, per row."""
+    n = np.asarray(unit_normal, dtype=np.float64)
+    # Cross with the axis least aligned with n, so the cross product never cancels.
+    axis = np.zeros_like(n)
+    axis[np.arange(len(n)), np.argmin(np.abs(n), axis=1)] = 1.0
+    u = np.cross(n, axis)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.cross(n, u)
+    return u, v
+
+
+def polygon(center, u, v, radius, k):
+    """The ``k + 1`` vertices (first repeated last) of the polygon inscribed in a circle."""
+    theta = 2.0 * np.pi * np.arange(k + 1) / k
+    pts = center + radius * (np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v)
+    pts[-1] = pts[0]
+    return pts
+
+
+def unit(vectors):
+    """Rows of ``vectors`` normalised, scaled first by a power of two against overflow."""
+    vectors = np.asarray(vectors, dtype=np.float64)
+    _, e = np.frexp(np.max(np.abs(vectors), axis=-1, keepdims=True))
+    scaled = np.ldexp(vectors, -e)
+    return scaled / np.linalg.norm(scaled, axis=-1, keepdims=True)
+
+
+def norm(vectors):
+    """Euclidean norms of the rows of ``vectors`` (last axis), without over- or underflow.
+
+    Each row is scaled by a power of two (exact) before squaring, so that
+    coordinates from 1e-300 to 1e300 are measured as accurately as unit ones.
+    """
+    vectors = np.asarray(vectors, dtype=np.float64)
+    biggest = np.max(np.abs(vectors), axis=-1, keepdims=True, initial=0.0)
+    with np.errstate(invalid="ignore"):
+        factor = pow2_scale(np.where(np.isfinite(biggest), biggest, 0.0))
+        return np.linalg.norm(vectors * factor, axis=-1) / factor[..., 0]
+
+
+def pow2_scale(size):
+    """A power of two ``f`` with ``size * f`` in ``[0.5, 1)``; 1 where ``size`` is 0."""
+    size = np.asarray(size, dtype=np.float64)
+    _, e = np.frexp(np.where(size > 0, size, 1.0))
+    return np.where(size > 0, np.ldexp(1.0, -e), 1.0)
+
+
+@dataclass(frozen=True)
+class Query:
+    """A validated query, flattened to rows: what the library layer sees.
+
+    Attributes
+    ----------
+    kind : {"triangle", "disk", "circle"}
+    index : ndarray of int64, shape ``(n,)``
+        Which shape (in the flattened batch) each row asks about.
+    points : ndarray of float64, shape ``(n, 3)``
+        Finite query points only: rows with NaN or inf are never passed.
+    vertices : ndarray, shape ``(m, 3, 3)``
+        Triangles (2D ones embedded in ``z = 0``); None for round shapes.
+    center, normal, radius : ndarray, shapes ``(m, 3)``, ``(m, 3)``, ``(m,)``
+        Round shapes, with unit normals; None for triangles.
+    segments : ndarray of int64, shape ``(m,)``
+        ``K`` for each shape; 0 where the backend does not tessellate.
+    """
+
+    kind: str
+    index: np.ndarray
+    points: np.ndarray
+    vertices: object
+    center: object
+    normal: object
+    radius: object
+    segments: np.ndarray
+
+    def groups(self):
+        """``(shape index, row positions in this query)`` for each shape that has rows."""
+        if len(self.index) == 0:
+            return
+        order = np.argsort(self.index, kind="stable")
+        cuts = np.flatnonzero(np.diff(self.index[order])) + 1
+        for chunk in np.split(order, cuts):
+            yield int(self.index[chunk[0]]), chunk
+
+
+@dataclass(frozen=True)
+class Raw:
+    """A library's answers for the rows of a :class:`Query`, before translation.
+
+    ``distance`` and ``point`` are the library's numbers in the caller's
+    coordinates (already converted from any rescaled frame); ``failure``
+    holds the library-level codes (OK, NO_RESULT, SENTINEL, EXCEPTION).
+    """
+
+    distance: np.ndarray
+    point: np.ndarray
+    failure: np.ndarray
+    margin: float = float("nan")
+
+    @classmethod
+    def empty(cls, n):
+        return cls(np.full(n, np.nan), np.full((n, 3), np.nan), np.full(n, Failure.OK, dtype=np.int8))
+
+
+class Backend:
+    """Base of the backends: one library behind proximity's query interface.
+
+    Subclasses set the class attributes and implement ``_triangles``,
+    ``_disks`` and ``_circles`` over a :class:`Query`; this class validates,
+    broadcasts, translates and builds the result.  Backends are context
+    managers; :meth:`close` releases whatever the library holds.
+    """
+
+    #: Registry name.
+    name = ""
+    #: Distribution on PyPI, for the version string.
+    distribution = ""
+    #: Relative accuracy documented for the library's arithmetic.
+    rtol = 64 * EPS
+    #: Native model of each kind of shape, for :class:`Model`.
+    primitives = {}
+    #: How the query point is given to the library.
+    probe = ""
+    #: Coordinates the library works in.
+    frame = "caller's coordinates"
+    #: Kinds of shape the library models by tessellation.
+    tessellated = ()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        """Release what the library holds; the base backend holds nothing."""
+
+    def __repr__(self):
+        return f"<{type(self).__name__} {self.name!r}>"
+
+    @property
+    def library(self):
+        """``"distribution version"`` of the wrapped library."""
+        return library_version(self.distribution)
+
+    def distance(self, shape, points, *, tol=None):
+        """Distances from ``points`` to ``shape`` as the library gives them, NaN where it fails.
+
+        Parameters and broadcasting are those of :meth:`closest_point`.
+
+        Returns
+        -------
+        ndarray of float64, shape ``batch``
+            A NumPy scalar for one point against one shape.
+        """
+        return self.closest_point(shape, points, tol=tol).result.distance
+
+    def closest_point(self, shape, points, *, tol=None):
+        """Ask the library for the closest point on ``shape`` to each of ``points``.
+
+        Parameters
+        ----------
+        shape : proximity.Triangle, proximity.Disk or proximity.Circle
+            One shape or a batch.
+        points : array_like, shape ``(..., D)``
+            Query points, broadcast against the shape's batch like
+            :func:`proximity.closest_point`.
+        tol : float, optional
+            Modelling tolerance, in the caller's length unit, for shapes the
+            library has no primitive for: they are cut into the fewest
+            segments whose sagitta is at most ``tol``.  Default ``1e-3 R``.
+
+        Returns
+        -------
+        BackendResult
+            proximity's result type in ``.result``, with a failure code,
+            a documented tolerance per row and a description of the model.
+        """
+        if not isinstance(shape, proximity.Shape):
+            raise TypeError(
+                f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}"
+            )
+        method = best_method(shape)
+        # proximity validates the points (and names the argument) and gives
+        # the geometry every answer is checked against.
+        reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
+        out_shape = reference.shape
+        kind, data, check_shape = _flatten_shape(shape)
+        points3 = _to_3d(np.asarray(points, dtype=np.float64))
+        all_points = np.broadcast_to(points3, out_shape + (3,)).reshape(-1, 3)
+        n = all_points.shape[0]
+        count = int(np.prod(shape.batch_shape, dtype=np.int64))
+        index = np.broadcast_to(np.arange(count).reshape(shape.batch_shape), out_shape).reshape(-1)
+        finite = np.isfinite(all_points).all(axis=1)
+
+        if kind in self.tessellated:
+            segments = segments_for(data["radius"], tol)
+            bound = sagitta(data["radius"], segments)
+        else:
+            segments = np.zeros(count, dtype=np.int64)
+            bound = np.zeros(count)
+        rows = np.flatnonzero(finite)
+        query = Query(
+            kind=kind,
+            index=index[rows],
+            points=all_points[rows],
+            segments=segments,
+            vertices=data.get("vertices"),
+            center=data.get("center"),
+            normal=data.get("normal"),
+            radius=data.get("radius"),
+        )
+        raw = getattr(self, f"_{kind}s")(query)
+
+        distance = np.full(n, np.nan)
+        point = np.full((n, 3), np.nan)
+        failure = np.full(n, Failure.NAN_INPUT, dtype=np.int8)
+        distance[rows] = raw.distance
+        point[rows] = raw.point
+        failure[rows] = raw.failure
+
+        scale, magnitude = _scales(kind, data, index, all_points)
+        tolerance = bound[index] + self.rtol * (scale + magnitude)
+        tolerance[~finite] = np.nan
+        _translate(
+            distance,
+            point,
+            failure,
+            all_points,
+            tolerance,
+            reference.reshape(-1),
+            check_shape,
+            out_shape,
+        )
+
+        bad = failure != Failure.OK
+        distance[bad] = np.nan
+        point[bad] = np.nan
+        model = Model(
+            library=self.library,
+            primitive=self.primitives[kind],
+            probe=self.probe,
+            segments=segments.reshape(shape.batch_shape),
+            bound=bound.reshape(shape.batch_shape),
+            margin=float(raw.margin),
+            rtol=self.rtol,
+            frame=self.frame,
+        )
+        result, unknown = _result(kind, shape.dim, out_shape, distance, point)
+        return BackendResult(
+            result=result,
+            failure=failure.reshape(out_shape),
+            tolerance=tolerance.reshape(out_shape),
+            model=model,
+            unknown=unknown,
+            backend=self.name,
+        )
+
+    def _triangles(self, query):
+        raise NotImplementedError
+
+    def _disks(self, query):
+        raise NotImplementedError
+
+    def _circles(self, query):
+        raise NotImplementedError
+
+
+def _to_3d(array):
+    if array.shape[-1] == 3:
+        return array
+    return np.concatenate([array, np.zeros(array.shape[:-1] + (1,))], axis=-1)
+
+
+def _flatten_shape(shape):
+    """``(kind, flattened data, the shape in 3D for the geometric checks)``.
+
+    A 2D triangle is checked as its embedding in ``z = 0``, so that a
+    returned point off that plane counts as off the shape.
+    """
+    batch = shape.batch_shape
+    if isinstance(shape, Triangle):
+        vertices = _to_3d(np.asarray(shape.vertices)).reshape(-1, 3, 3)
+        check = shape if shape.dim == 3 else Triangle(vertices.reshape(batch + (3, 3)))
+        return "triangle", {"vertices": vertices}, check
+    if isinstance(shape, (Disk, Circle)):
+        center = np.broadcast_to(shape.center, batch + (3,)).reshape(-1, 3)
+        normal = unit(np.broadcast_to(shape.normal, batch + (3,)).reshape(-1, 3))
+        radius = np.broadcast_to(shape.radius, batch).reshape(-1).astype(np.float64)
+        kind = "disk" if isinstance(shape, Disk) else "circle"
+        return kind, {"center": center, "normal": normal, "radius": radius}, shape
+    raise TypeError(f"backends answer for Triangle, Disk and Circle; got {type(shape).__name__}")
+
+
+def error_scale(shape, points):
+    """proximity's error scale ``S`` of each query row, of the broadcast shape.
+
+    ``S = max_i |P - V_i|`` for a triangle, ``|P - C| + R`` for a disk or
+    circle: proximity's ``robust`` method is accurate to ``8 eps S``.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    out_shape = np.broadcast_shapes(points.shape[:-1], shape.batch_shape)
+    kind, data, _ = _flatten_shape(shape)
+    count = int(np.prod(shape.batch_shape, dtype=np.int64))
+    index = np.broadcast_to(np.arange(count).reshape(shape.batch_shape), out_shape).reshape(-1)
+    rows = np.broadcast_to(_to_3d(points), out_shape + (3,)).reshape(-1, 3)
+    return _scales(kind, data, index, rows)[0].reshape(out_shape)
+
+
+def _scales(kind, data, index, points):
+    """Per row: proximity's error scale ``S`` and the coordinate magnitude ``M``."""
+    magnitude = np.max(np.abs(points), axis=1, initial=0.0)
+    if kind == "triangle":
+        v = data["vertices"][index]
+        scale = np.max(norm(v - points[:, None, :]), axis=1, initial=0.0)
+        magnitude = np.maximum(magnitude, np.max(np.abs(v), axis=(1, 2), initial=0.0))
+    else:
+        c = data["center"][index]
+        scale = norm(points - c) + data["radius"][index]
+        magnitude = np.maximum(magnitude, np.max(np.abs(c), axis=1, initial=0.0))
+    return scale, magnitude
+
+
+def _translate(distance, point, failure, points, tolerance, reference, check_shape, out_shape):
+    """Mark answers that contradict the geometry; arrays are flat and changed in place."""
+    ok = failure == Failure.OK
+    # No shape here has volume, so a negative distance is either rounding
+    # around contact (reported as 0) or not a distance at all.
+    negative = ok & (distance < -tolerance)
+    failure[negative] = Failure.SENTINEL
+    ok &= ~negative
+    # "Touching" is a distance within the tolerance of 0; it contradicts the
+    # geometry when proximity puts the shape more than twice that far, so
+    # that the disagreement exceeds the tolerance whatever the rounding.
+    touching = ok & (np.abs(distance) <= tolerance) & (reference > 2.0 * tolerance)
+    failure[touching] = Failure.FALSE_TOUCHING
+    ok &= ~touching
+    distance[ok & (distance < 0)] = 0.0
+    if not ok.any():
+        return
+    # Distance from each returned point to the shape, by proximity: a point
+    # farther than the tolerance is not on the shape (or on its model).
+    safe = np.where(ok[:, None] & np.isfinite(point), point, 0.0)
+    off = np.asarray(check_shape.distance(safe.reshape(out_shape + (3,))), dtype=np.float64).reshape(-1)
+    not_on = ok & (~np.isfinite(point).all(axis=1) | ~(off <= tolerance))
+    failure[not_on] = Failure.POINT_OFF_SHAPE
+    ok &= ~not_on
+    gap = norm(np.where(ok[:, None], point - points, 0.0))
+    inconsistent = ok & ~(np.abs(gap - distance) <= tolerance)
+    failure[inconsistent] = Failure.INCONSISTENT
+
+
+def _result(kind, dim, out_shape, distance, point):
+    """proximity's result type, with the fields no library gives set to 'unknown'."""
+    feature = np.full(out_shape, Feature.NONE, dtype=np.int8)
+    with np.errstate(over="ignore", under="ignore"):
+        # As in proximity, the square may leave the float64 range; the distance does not.
+        sqr_distance = distance * distance
+    common = dict(
+        distance=distance.reshape(out_shape),
+        sqr_distance=sqr_distance.reshape(out_shape),
+        point=point.reshape(out_shape + (3,))[..., :dim].copy(),
+        feature=feature,
+    )
+    if kind == "triangle":
+        return TriangleResult(**common, barycentric=np.full(out_shape + (3,), np.nan)), (
+            "feature",
+            "barycentric",
+        )
+    rounds = dict(height=np.full(out_shape, np.nan), radial=np.full(out_shape, np.nan))
+    if kind == "disk":
+        return DiskResult(**common, **rounds), ("feature", "height", "radial")
+    return CircleResult(**common, **rounds, equidistant=np.zeros(out_shape, dtype=bool)), (
+        "feature",
+        "height",
+        "radial",
+        "equidistant",
+    )

@@ -1,0 +1,160 @@
+"""Cross-check every installed backend against proximity on a generated scene.
+
+Run ``python -m adapters.check`` for the default scene, or
+``python -m adapters.check --help`` for the options.  The scene has groups
+of well-conditioned triangles, disks and circles, and groups built to show
+each library's known failure modes: degenerate and sub-millimetre
+triangles, points on a triangle's face, points in a disk's plane.  trimesh is
+asked twice: as the backend uses it (rescaled rows) and on the caller's
+coordinates (``trimesh[raw]``).
+"""
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+import proximity
+
+from . import NAMES, available, get
+from .crosscheck import cross_check
+
+RAW_TRIMESH = "trimesh-raw"
+
+
+def _rotation(rng, n):
+    q, r = np.linalg.qr(rng.normal(size=(n, 3, 3)))
+    return q * np.sign(np.diagonal(r, axis1=1, axis2=2))[:, None, :]
+
+
+def _good_triangles(rng, n, size):
+    # An equilateral triangle, stretched by at most 2x, rotated and moved:
+    # well-conditioned, with no sliver angles.
+    base = np.array([[1.0, 0.0, 0.0], [-0.5, 0.75**0.5, 0.0], [-0.5, -(0.75**0.5), 0.0]])
+    stretch = rng.uniform(0.5, 1.0, size=(n, 1, 3))
+    tri = np.einsum("nij,nkj->nki", _rotation(rng, n), base * stretch)
+    return tri * size[:, None, None] + rng.normal(size=(n, 1, 3)) * size[:, None, None]
+
+
+def _around(rng, centers, size, spread=1.5):
+    return centers + rng.normal(size=centers.shape) * spread * size[:, None]
+
+
+def scene(n, seed=0):
+    """The generated scene: a list of ``(label, shape, points)``.
+
+    Parameters
+    ----------
+    n : int
+        Rows per group: one point against each of ``n`` shapes.
+    seed : int
+        Seed of the random generator.
+    """
+    rng = np.random.default_rng(seed)
+    groups = []
+
+    ones = np.ones(n)
+    tri = _good_triangles(rng, n, ones)
+    groups.append(("triangles", proximity.Triangle(tri), _around(rng, tri.mean(axis=1), ones)))
+
+    tiny = 10.0 ** rng.uniform(-4, -3, n)
+    tri = _good_triangles(rng, n, tiny)
+    groups.append(
+        (
+            "sub-millimetre triangles (1e-4 to 1e-3)",
+            proximity.Triangle(tri),
+            _around(rng, tri.mean(axis=1), tiny),
+        )
+    )
+
+    tri = _good_triangles(rng, n, ones)
+    weights = rng.dirichlet([1.0, 1.0, 1.0], size=n)
+    groups.append(
+        ("triangles, points on the face", proximity.Triangle(tri), np.einsum("ni,nij->nj", weights, tri))
+    )
+
+    # Degenerate triangles, exactly so: coordinates on a grid of 1/8, so that
+    # a + d and a + 3 d are exactly collinear with a.
+    a = np.round(rng.normal(size=(n, 3)) * 8) / 8
+    d = np.round(rng.normal(size=(n, 3)) * 8) / 8 + 0.125
+    # Rows 0, 3, ... are collinear, rows 1, 4, ... have two coincident
+    # vertices, rows 2, 5, ... are a point.
+    degenerate = np.stack([a, a, a], axis=1)
+    degenerate[0::3, 1] += d[0::3]
+    degenerate[0::3, 2] += 3 * d[0::3]
+    degenerate[1::3, 2] += d[1::3]
+    groups.append(("degenerate triangles", proximity.Triangle(degenerate), _around(rng, a, ones)))
+
+    center, normal = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    radius = rng.uniform(0.2, 2.0, n)
+    groups.append(("disks", proximity.Disk(center, normal, radius), _around(rng, center, radius)))
+
+    disk = proximity.Disk(center, normal, radius)
+    direction = rng.normal(size=(n, 3))
+    unit_normal = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    direction -= np.sum(direction * unit_normal, axis=1, keepdims=True) * unit_normal
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    inside = center + direction * (rng.uniform(0.0, 0.95, n) * radius)[:, None]
+    groups.append(("disks, points in the plane inside the rim", disk, inside))
+
+    center, normal = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    radius = rng.uniform(0.2, 2.0, n)
+    groups.append(("circles", proximity.Circle(center, normal, radius), _around(rng, center, radius)))
+    return groups
+
+
+def main(argv=None):
+    """Run the cross-check on the generated scene and print one table per group."""
+    parser = argparse.ArgumentParser(prog="python -m adapters.check", description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=0, help="random seed of the scene (default 0)")
+    parser.add_argument("-n", type=int, default=40, help="rows per group of the scene (default 40)")
+    parser.add_argument(
+        "--tol",
+        type=float,
+        default=None,
+        help="modelling tolerance of tessellated circles and disks, in length units "
+        "(default 1e-3 of each radius)",
+    )
+    parser.add_argument(
+        "--backend",
+        action="append",
+        choices=(*NAMES, RAW_TRIMESH),
+        default=None,
+        help="backend to ask; repeat for several (default: every installed one, "
+        f"plus {RAW_TRIMESH} when trimesh is installed)",
+    )
+    args = parser.parse_args(argv)
+    if args.n < 1:
+        parser.error("-n must be at least 1")
+
+    if args.backend is None:
+        names = available()
+        if "trimesh" in names:
+            names.append(RAW_TRIMESH)
+    else:
+        names = list(dict.fromkeys(args.backend))
+    if not names:
+        print("no backend library is installed: pip install 'proximity[adapters]'", file=sys.stderr)
+        return 1
+
+    start = time.perf_counter()
+    backends = [get("trimesh", rescale=False) if name == RAW_TRIMESH else get(name) for name in names]
+    try:
+        for label, shape, points in scene(args.n, args.seed):
+            report = cross_check(shape, points, backends=backends, tol=args.tol, worst=1)
+            print(f"## {label}")
+            print(report.table())
+            print()
+    finally:
+        for backend in backends:
+            backend.close()
+    print(
+        f"{len(backends)} backends, seed {args.seed}, {args.n} rows per group, "
+        f"{time.perf_counter() - start:.1f} s"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

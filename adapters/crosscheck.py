@@ -1,0 +1,256 @@
+"""Ask several libraries the same query and summarise how they disagree with proximity.
+
+The reference is proximity's most accurate method.  A backend's disagreement
+on a row is ``|d_backend - d_reference|``, over the rows it answered; rows it
+could not answer are counted by :class:`~adapters.Failure` reason instead.
+"""
+
+import types
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._base import Backend, Failure, Model, best_method, error_scale
+
+
+@dataclass(frozen=True)
+class Summary:
+    """One backend's agreement with the reference.
+
+    Attributes
+    ----------
+    backend : str
+        Backend name.
+    model : Model
+        What the backend built.
+    rows : int
+        Number of query rows (the size of the broadcast shape).
+    answered : int
+        Rows whose failure code is ``OK``.
+    failures : mapping of str to int
+        Count of each other :class:`~adapters.Failure` reason that occurred.
+    max_disagreement, median_disagreement : float
+        Of ``|d - d_ref|`` over the answered rows (NaN if none).
+    max_relative, median_relative : float
+        Of ``|d - d_ref| / S`` with proximity's error scale ``S``.
+    beyond_tolerance : int
+        Answered rows whose disagreement exceeds the backend's documented
+        tolerance for that row.
+    """
+
+    backend: str
+    model: Model
+    rows: int
+    answered: int
+    failures: types.MappingProxyType
+    max_disagreement: float
+    median_disagreement: float
+    max_relative: float
+    median_relative: float
+    beyond_tolerance: int
+
+
+@dataclass(frozen=True)
+class Case:
+    """One answered row, among a backend's largest disagreements.
+
+    ``ratio`` is the disagreement divided by the backend's tolerance for the
+    row: above 1 the backend is outside what it documents.
+    """
+
+    backend: str
+    index: tuple
+    point: tuple
+    reference: float
+    distance: float
+    disagreement: float
+    tolerance: float
+    ratio: float
+
+
+@dataclass(frozen=True)
+class CrossCheck:
+    """The result of :func:`cross_check`.
+
+    Attributes
+    ----------
+    shape : str
+        ``repr`` of the shape queried.
+    reference : str
+        The proximity method used as reference.
+    summaries : tuple of Summary
+        One per backend, in the order asked.
+    worst : tuple of Case
+        For each backend, its answered rows with the largest
+        disagreement-to-tolerance ratio, largest first.
+    """
+
+    shape: str
+    reference: str
+    summaries: tuple
+    worst: tuple
+
+    def summary(self, backend):
+        """The :class:`Summary` of the backend named ``backend``."""
+        for s in self.summaries:
+            if s.backend == backend:
+                return s
+        raise KeyError(
+            f"no backend {backend!r} in this cross-check; have {[s.backend for s in self.summaries]}"
+        )
+
+    def table(self):
+        """The summaries and the worst cases as a plain-text table."""
+        rows = [
+            ("backend", "model", "answered", "max |dd|/S", "median |dd|/S", "max |dd|", ">tol", "failures")
+        ]
+        for s in self.summaries:
+            failures = ", ".join(f"{name}:{count}" for name, count in s.failures.items()) or "-"
+            rows.append(
+                (
+                    s.backend,
+                    s.model.describe(),
+                    f"{s.answered}/{s.rows}",
+                    _num(s.max_relative),
+                    _num(s.median_relative),
+                    _num(s.max_disagreement),
+                    str(s.beyond_tolerance),
+                    failures,
+                )
+            )
+        lines = [f"{self.shape} against proximity {self.reference}", *_format(rows)]
+        if self.worst:
+            cases = [("backend", "index", "distance", "reference", "|dd|", "tol", "|dd|/tol")]
+            for c in self.worst:
+                cases.append(
+                    (
+                        c.backend,
+                        str(c.index),
+                        _num(c.distance, 10),
+                        _num(c.reference, 10),
+                        _num(c.disagreement),
+                        _num(c.tolerance),
+                        _num(c.ratio),
+                    )
+                )
+            lines += ["", "largest disagreements, relative to each backend's tolerance:", *_format(cases)]
+        return "\n".join(lines)
+
+
+def cross_check(shape, points, backends=None, tol=None, *, worst=3):
+    """Ask every backend and proximity the same query, and compare.
+
+    Parameters
+    ----------
+    shape : proximity.Triangle, proximity.Disk or proximity.Circle
+        One shape or a batch.
+    points : array_like, shape ``(..., D)``
+        Query points, broadcast against the shape's batch.
+    backends : iterable of str or Backend, optional
+        Backend names (created here and closed afterwards) or backend
+        objects (left open).  Default: every name in :func:`available`.
+    tol : float, optional
+        Modelling tolerance passed to each backend (see
+        :meth:`Backend.closest_point`); default ``1e-3 R``.
+    worst : int, optional
+        How many of its largest disagreements to keep per backend.
+
+    Returns
+    -------
+    CrossCheck
+        Per-backend summaries and worst cases; ``.table()`` formats them.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity, adapters
+    >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> points = np.random.default_rng(0).normal(size=(20, 3))
+    >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
+    >>> s = report.summary("trimesh")
+    >>> s.answered, s.beyond_tolerance, s.max_disagreement <= 1e-3
+    (20, 0, True)
+    """
+    from . import available, get
+
+    names = available() if backends is None else list(backends)
+    owned = []
+    instances = []
+    try:
+        for b in names:
+            if isinstance(b, Backend):
+                instances.append(b)
+            else:
+                instance = get(b)
+                owned.append(instance)
+                instances.append(instance)
+        method = best_method(shape)
+        reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
+        scale = np.asarray(error_scale(shape, points), dtype=np.float64)
+        point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
+        summaries, cases = [], []
+        for backend in instances:
+            r = backend.closest_point(shape, points, tol=tol)
+            summary, worst_cases = _summarise(backend.name, r, reference, scale, point_rows, worst)
+            summaries.append(summary)
+            cases.extend(worst_cases)
+    finally:
+        for instance in owned:
+            instance.close()
+    return CrossCheck(shape=repr(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases))
+
+
+def _summarise(name, r, reference, scale, point_rows, worst):
+    failure = np.asarray(r.failure).reshape(-1)
+    distance = np.asarray(r.result.distance, dtype=np.float64).reshape(-1)
+    ref = reference.reshape(-1)
+    tolerance = np.asarray(r.tolerance, dtype=np.float64).reshape(-1)
+    ok = failure == Failure.OK
+    gap = np.abs(distance - ref)[ok]
+    relative = gap / np.maximum(scale.reshape(-1)[ok], np.finfo(np.float64).tiny)
+    counts = {Failure(code).name: int(np.sum(failure == code)) for code in np.unique(failure[~ok])}
+    summary = Summary(
+        backend=name,
+        model=r.model,
+        rows=int(failure.size),
+        answered=int(ok.sum()),
+        failures=types.MappingProxyType(counts),
+        max_disagreement=_stat(np.max, gap),
+        median_disagreement=_stat(np.median, gap),
+        max_relative=_stat(np.max, relative),
+        median_relative=_stat(np.median, relative),
+        beyond_tolerance=int(np.sum(gap > tolerance[ok])),
+    )
+    ratio = gap / tolerance[ok]
+    rows = np.flatnonzero(ok)
+    order = np.argsort(-ratio, kind="stable")[:worst]
+    shape = reference.shape
+    flat_points = point_rows.reshape(-1, point_rows.shape[-1])
+    cases = [
+        Case(
+            backend=name,
+            index=tuple(int(i) for i in np.unravel_index(rows[j], shape)) if shape else (),
+            point=tuple(float(x) for x in flat_points[rows[j]]),
+            reference=float(ref[rows[j]]),
+            distance=float(distance[rows[j]]),
+            disagreement=float(gap[j]),
+            tolerance=float(tolerance[rows[j]]),
+            ratio=float(ratio[j]),
+        )
+        for j in order
+    ]
+    return summary, cases
+
+
+def _stat(func, values):
+    return float(func(values)) if values.size else float("nan")
+
+
+def _num(value, digits=2):
+    if value != value:
+        return "-"
+    return f"{value:.{digits}g}" if digits > 3 else f"{value:.{digits}e}"
+
+
+def _format(rows):
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    return ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]

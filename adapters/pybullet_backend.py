@@ -1,0 +1,301 @@
+"""pybullet backend: ``getClosestPoints`` between the shape's body and a probe body.
+
+Model
+-----
+Each backend owns one ``DIRECT`` physics client, disconnected by
+:meth:`PybulletBackend.close` (or when the backend is garbage collected or
+the interpreter exits).  Its world holds at most two bodies: a probe, moved
+to each query point with ``resetBasePositionAndOrientation``, and the body of
+the shape being asked about, removed once its rows are answered.
+Collision shapes are freed only by ``resetSimulation``, which is run after
+every :data:`RESET_EVERY` shapes.
+
+Each shape is given in its own frame: translated to its first vertex (or
+center) and scaled by a power of two so that its size is in ``[0.5, 1)``.
+pybullet's accuracy depends on the size of the probe relative to the shape
+(it refuses a probe of radius 0): with a probe of radius 1e-9 in the
+caller's unit, triangles of size 1e-6 were off by up to 0.5% of their size.
+In the shape's frame the probe is always the same small fraction of it.
+
+Probe
+    ``GEOM_SPHERE`` of radius 1e-9 (of the shape's size): pybullet refuses
+    radius 0.  The radius is added back to every distance.
+Triangle
+    ``GEOM_MESH`` of the three vertices (a one-triangle convex hull).
+Disk
+    ``GEOM_CYLINDER`` of height 0, rotated so its axis is the normal.
+Circle
+    pybullet has no circle: the inscribed polygon of ``K`` segments, with
+    the fewest ``K`` whose sagitta ``R (1 - cos(pi/K))`` meets the
+    tolerance.  Its segments all have the same length, so one
+    ``GEOM_CAPSULE`` of radius 1e-9 (pybullet refuses 0) is moved to each
+    segment in turn and the nearest answer is kept; the capsule radius is
+    added back.  A compound of ``K`` capsules would be one body, but
+    ``getClosestPoints`` reports at most 16 points per pair of bodies, so a
+    compound of more children can miss its nearest one; creating a body
+    also costs about 0.3 ms per capsule, where moving one costs a few
+    microseconds.
+
+Every body's collision margin is set to 0 with ``changeDynamics`` (the
+default is 0.001) and read back into :attr:`Model.margin`.
+
+Known biases, translated
+------------------------
+* Degenerate triangles (collinear or coincident vertices) give no result:
+  ``NO_RESULT``.
+* Distances are signed: in contact, pybullet reports a distance between
+  ``-r`` and 0 for the probe of radius ``r``.  After ``r`` is added back,
+  negative distances are reported as 0, and points in contact can come out
+  at up to ``r`` (1e-9 of the shape's size).  Rows reported touching where
+  proximity finds the shape farther than the tolerance become
+  ``FALSE_TOUCHING``.
+* With the default margin of 0.001, a cylinder of height 0 is a disk whose
+  rim is squared off: distances in directions 45 degrees off the rim's
+  plane are too long by ``(sqrt(2) - 1) * 0.001``, whatever the radius
+  (0.04% of a unit radius, 0.4% of a radius of 0.1).  With margin 0 this
+  bias is gone.
+* Near contact, GJK stops early: for points within about ``1e-6`` of the
+  shape's size from it, distances are off by up to ``2e-6`` of the size
+  (measured at a disk's rim), and points ``1e-7`` from a triangle can be
+  reported touching.  Elsewhere distances agree with proximity to about
+  ``1e-12`` of the size.  The documented relative tolerance is ``1e-5``.
+"""
+
+import weakref
+
+import numpy as np
+
+from ._base import Backend, Failure, Raw, import_library, norm, plane_frame, polygon, pow2_scale
+
+#: Radius of the probe sphere and of the circle's capsules, relative to the
+#: shape's size; pybullet refuses 0.  Added back to every distance.
+PROBE_RADIUS = 1e-9
+
+IDENTITY = [0.0, 0.0, 0.0, 1.0]
+ORIGIN = [0.0, 0.0, 0.0]
+
+#: Collision shapes created between two ``resetSimulation`` calls: removing a
+#: body does not free its collision shape.
+RESET_EVERY = 1000
+
+
+def load():
+    """Import pybullet, or raise an ImportError naming the extra to install."""
+    return import_library("pybullet", "pybullet")
+
+
+def _disconnect(pybullet, client):
+    # A finalizer must not raise: at interpreter exit the server may already be gone.
+    try:
+        pybullet.disconnect(physicsClientId=client)
+    except pybullet.error:
+        pass
+
+
+def _quaternion_z_to(direction):
+    """``(x, y, z, w)`` turning +z onto ``direction`` (unit rows); the sign of ``direction`` is free."""
+    d = np.where(direction[..., 2:3] < 0, -direction, direction)
+    q = np.stack([-d[..., 1], d[..., 0], np.zeros(d.shape[:-1]), 1.0 + d[..., 2]], axis=-1)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+class PybulletBackend(Backend):
+    """Closest points by pybullet, in a ``DIRECT`` client owned by the backend.
+
+    Examples
+    --------
+    >>> import proximity, adapters
+    >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> with adapters.get("pybullet") as pb:
+    ...     r = pb.closest_point(disk, [[2.0, 0.0, 1.0]])
+    >>> round(float(r.distance[0]), 9), r.model.margin
+    (1.414213562, 0.0)
+    """
+
+    name = "pybullet"
+    distribution = "pybullet"
+    rtol = 1e-5
+    primitives = {
+        "triangle": "GEOM_MESH(1 triangle)",
+        "disk": "GEOM_CYLINDER(R, height 0)",
+        "circle": "GEOM_CAPSULE(1e-9, L) moved to K segments",
+    }
+    probe = f"GEOM_SPHERE(radius {PROBE_RADIUS:g} of the shape's size), added back"
+    frame = "per shape: origin at a vertex or the center, scaled by a power of two"
+    tessellated = ("circle",)
+
+    def __init__(self):
+        self._p = load()
+        self._client = self._p.connect(self._p.DIRECT)
+        if self._client < 0:
+            raise RuntimeError("pybullet could not start a DIRECT physics client")
+        self._finalizer = weakref.finalize(self, _disconnect, self._p, self._client)
+        self._created = 0
+        self._probe = self._new_probe()
+
+    @property
+    def client(self):
+        """The physics client id this backend owns."""
+        return self._client
+
+    @property
+    def closed(self):
+        """Whether :meth:`close` has run."""
+        return not self._finalizer.alive
+
+    def close(self):
+        """Disconnect the physics client; further queries raise RuntimeError."""
+        self._finalizer()
+
+    def num_bodies(self):
+        """Bodies in this backend's world (the probe, and the shape being asked about)."""
+        return self._p.getNumBodies(physicsClientId=self._client)
+
+    def _call(self, name, *args, **kwargs):
+        return getattr(self._p, name)(*args, physicsClientId=self._client, **kwargs)
+
+    def _new_probe(self):
+        sphere = self._call("createCollisionShape", self._p.GEOM_SPHERE, radius=PROBE_RADIUS)
+        self._created += 1
+        return self._call("createMultiBody", baseMass=0, baseCollisionShapeIndex=sphere)
+
+    def _fresh_world(self):
+        # Bodies are removed after each shape, but their collision shapes stay
+        # in the server until the simulation is reset.
+        if self._created >= RESET_EVERY:
+            self._call("resetSimulation")
+            self._created = 0
+            self._probe = self._new_probe()
+
+    def _run(self, query, describe):
+        """Answer every group of rows.
+
+        ``describe(k)`` gives ``(create, placements, origin, factor, added)``
+        for shape ``k``: a function that creates its collision shape in the
+        shape's own frame, the ``(position, orientation)`` of each placement
+        of the body, the frame's origin and power-of-two scale, and the
+        radius to add back to distances.  The body is asked at each
+        placement in turn (the segments of a circle) and each row keeps its
+        nearest answer.
+        """
+        if self.closed:
+            raise RuntimeError("this pybullet backend is closed")
+        raw = Raw.empty(len(query.index))
+        margins = [0.0]
+        for k, chunk in query.groups():
+            create, placements, origin, factor, added = describe(k)
+            self._fresh_world()
+            try:
+                shape = create()
+                self._created += 1
+                position, orientation = placements[0]
+                body = self._call(
+                    "createMultiBody",
+                    baseMass=0,
+                    baseCollisionShapeIndex=shape,
+                    basePosition=position,
+                    baseOrientation=orientation,
+                )
+            except self._p.error:
+                raw.failure[chunk] = Failure.EXCEPTION
+                continue
+            local = (query.points[chunk] - origin) * factor
+            distance = np.full(len(chunk), np.inf)
+            nearest = np.full((len(chunk), 3), np.nan)
+            failure = np.full(len(chunk), Failure.OK, dtype=np.int8)
+            try:
+                self._call("changeDynamics", body, -1, collisionMargin=0.0)
+                margins.append(self._call("getDynamicsInfo", body, -1)[-1] / factor)
+                for position, orientation in placements:
+                    self._call("resetBasePositionAndOrientation", body, position, orientation)
+                    d, x, f = self._ask(body, local, added)
+                    closer = (f == Failure.OK) & (d < distance)
+                    distance[closer] = d[closer]
+                    nearest[closer] = x[closer]
+                    failure = np.maximum(failure, f)
+            finally:
+                self._call("removeBody", body)
+            distance[failure != Failure.OK] = np.nan
+            raw.distance[chunk] = distance / factor
+            raw.point[chunk] = nearest / factor + origin
+            raw.failure[chunk] = failure
+        return Raw(raw.distance, raw.point, raw.failure, margin=max(margins))
+
+    def _ask(self, body, local, added):
+        n = len(local)
+        distance = np.full(n, np.nan)
+        nearest = np.full((n, 3), np.nan)
+        failure = np.full(n, Failure.OK, dtype=np.int8)
+        reach = 2.0 * (norm(local) + 1.0)
+        for i, p in enumerate(local.tolist()):
+            self._call("resetBasePositionAndOrientation", self._probe, p, IDENTITY)
+            contacts = self._call("getClosestPoints", body, self._probe, float(reach[i]))
+            if not contacts:
+                failure[i] = Failure.NO_RESULT
+                continue
+            best = min(contacts, key=lambda c: c[8])
+            # Signed distance between the inflated shapes, with the probe's and
+            # the capsule's radii added back; small negatives mean contact.
+            distance[i] = best[8] + PROBE_RADIUS + added
+            nearest[i] = best[5]
+        return distance, nearest, failure
+
+    def _triangles(self, query):
+        def describe(k):
+            v = query.vertices[k]
+            origin = v[0]
+            factor = float(pow2_scale(np.max(np.abs(v - origin))))
+            local = ((v - origin) * factor).tolist()
+
+            def create():
+                return self._call(
+                    "createCollisionShape", self._p.GEOM_MESH, vertices=local, indices=[0, 1, 2]
+                )
+
+            return create, [(ORIGIN, IDENTITY)], origin, factor, 0.0
+
+        return self._run(query, describe)
+
+    def _disks(self, query):
+        def describe(k):
+            factor = float(pow2_scale(query.radius[k]))
+            radius = float(query.radius[k] * factor)
+
+            def create():
+                return self._call("createCollisionShape", self._p.GEOM_CYLINDER, radius=radius, height=0.0)
+
+            # The cylinder's axis is set by the body's orientation: a frame
+            # orientation on the shape would wrap it in a compound, whose
+            # margin is not the cylinder's.
+            placement = (ORIGIN, _quaternion_z_to(query.normal[k]).tolist())
+            return create, [placement], query.center[k], factor, 0.0
+
+        return self._run(query, describe)
+
+    def _circles(self, query):
+        u, v = plane_frame(query.normal)
+
+        def describe(k):
+            factor = float(pow2_scale(query.radius[k]))
+            corners = polygon(np.zeros(3), u[k], v[k], query.radius[k] * factor, int(query.segments[k]))
+            axis = corners[1:] - corners[:-1]
+            # All segments of the inscribed polygon have the same length, so
+            # one capsule serves them all, moved from segment to segment.
+            length = float(np.linalg.norm(axis[0]))
+            direction = axis / max(length, np.finfo(np.float64).tiny)
+            placements = list(
+                zip(
+                    ((corners[1:] + corners[:-1]) / 2).tolist(),
+                    _quaternion_z_to(direction).tolist(),
+                    strict=True,
+                )
+            )
+
+            def create():
+                return self._call(
+                    "createCollisionShape", self._p.GEOM_CAPSULE, radius=PROBE_RADIUS, height=length
+                )
+
+            return create, placements, query.center[k], factor, PROBE_RADIUS
+
+        return self._run(query, describe)
