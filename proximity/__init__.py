@@ -4,6 +4,7 @@ Point-triangle, point-circle and point-disk distance, on single points and
 NumPy batches, behind one shape protocol.
 """
 
+from ._counts import stats as certified_stats
 from .results import CircleResult, DiskResult, Feature, Result, TriangleResult
 from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle
 
@@ -17,6 +18,7 @@ __all__ = [
     "Shape",
     "Triangle",
     "TriangleResult",
+    "certified_stats",
     "closest_point",
     "distance",
 ]
@@ -45,10 +47,12 @@ def closest_point(shape, points, *, method=DEFAULT_METHOD):
         ``(N, D)`` against ``N`` shapes pairwise, ``(N, 1, D)`` against ``M``
         shapes for all pairs.  Rows containing NaN or inf give NaN (feature
         ``Feature.NONE``) in those rows only.
-    method : {"robust", "eberly"}, keyword-only
+    method : {"robust", "certified", "eberly"}, keyword-only
         ``robust`` (default) is accurate to ``8 eps S`` on every finite input;
-        ``eberly`` is the seed's region algorithm as written, kept as a
-        baseline (NaN on zero-area triangles).
+        ``certified`` is faithfully rounded (within one ulp of the exact
+        distance) with the exact closest feature; ``eberly`` is the seed's
+        algorithm as written, kept as a baseline (NaN on zero-area
+        triangles).
 
     Returns
     -------

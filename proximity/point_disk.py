@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit, prange
 from numba.core import types
 
+from . import _exact, certified
 from ._loops import A_IN2, A_IN3, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
 from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
 from .results import Feature
@@ -27,7 +28,8 @@ RIM = int(Feature.RIM)
 
 EBERLY = 0
 ROBUST = 1
-METHODS = {"eberly": EBERLY, "robust": ROBUST}
+CERTIFIED = 2
+METHODS = {"eberly": EBERLY, "robust": ROBUST, "certified": CERTIFIED}
 
 
 @njit(inline="always", error_model="numpy")
@@ -79,15 +81,41 @@ def _query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, 
     return d, sqr, x, y, z, RIM, e, h, q
 
 
+@njit(inline="always", error_model="numpy")
+def _any_query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """:func:`_query` for every method, with a leading status (certified only)."""
+    if method == CERTIFIED and math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+        return certified.round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
+    d, s, x, y, z, f, e, h, q = _query(
+        method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz
+    )
+    return certified.CERTAIN, d, s, x, y, z, f, e, h, q
+
+
 @njit(cache=True, error_model="numpy")
 def single(out, method, s, p):
     """One query, written to ``out[:9]``: the fast path for one point and one shape.
 
-    ``s`` holds ``(is_disk, center, unit normal, normal, radius)`` flattened.
+    ``s`` holds ``(is_disk, center, unit normal, normal, radius)`` flattened;
+    ``out[9]`` is set to 1 where the certified method needs its exact fallback.
     """
-    out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _query(
+    out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _any_query(
         method, s[0] != 0.0, s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], p[0], p[1], p[2]
     )
+
+
+def _exact_query(is_disk, center, unit_normal, normal, radius, point):
+    """The certified method's exact fallback for one query."""
+    row = np.empty(10)
+    args = np.concatenate([[float(is_disk)], center, unit_normal, normal, [radius]])
+    single(row, ROBUST, args, np.ascontiguousarray(point))
+    return _exact.round_shape(is_disk, center, normal, radius, point, row[2:5])
+
+
+def exact_row(row, args, point):
+    """Redo a fast-path row with the certified method's exact fallback."""
+    row[:9] = _exact_query(args[0] != 0.0, args[1:4], args[4:7], args[7:10], args[10], point)
+    row[9] = 0.0
 
 
 @njit(inline="always")
@@ -112,19 +140,24 @@ _SIGNATURE = types.void(
     OUT_FLAG,
     OUT1,
     OUT1,
+    OUT_FLAG,
     types.boolean,
 )
 
 
 @njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
-def _batch(method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, full):
+def _batch(
+    method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, exact, full
+):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
     ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
     only ``dist`` is written.  As for triangles, queries are gathered in
     blocks so that the robust core runs as SIMD code, and rows outside its
-    safe window are redone on the scalar path.
+    safe window are redone on the scalar path.  The certified method runs on
+    that path for every row, and flags in ``exact`` the rows its filter
+    could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
@@ -166,7 +199,7 @@ def _batch(method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equid
             k = k0 + q
             ii = k // n_j
             jj = k - ii * n_j
-            res = _query(
+            cert = _any_query(
                 method,
                 is_disk,
                 a[0, q],
@@ -183,7 +216,9 @@ def _batch(method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equid
                 a[7, q],
                 a[8, q],
             )
-            _store(r, q, res)
+            if method == CERTIFIED:
+                exact[k] = cert[0] != certified.CERTAIN
+            _store(r, q, cert[1:])
         for q in range(nb):
             k = k0 + q
             dist[k] = r[0, q]
@@ -214,5 +249,16 @@ def query(method, is_disk, center, unit_normal, normal, radius, points, out_shap
         height=np.empty(m),
         radial=np.empty(m),
     )
-    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, *out.values(), full)
+    exact = np.zeros(n if method == "certified" else 0, np.bool_)
+    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, *out.values(), exact, full)
+    if method == "certified":
+        rows = np.flatnonzero(exact)
+        for k in rows:
+            i, j = divmod(int(k), n_j)
+            res = _exact_query(is_disk, C[i, j], U[i, j], N[i, j], R[i, j], P[i, j])
+            out["distance"][k] = res[0]
+            if full:
+                out["sqr_distance"][k], out["point"][k], out["feature"][k] = res[1], res[2:5], res[5]
+                out["equidistant"][k], out["height"][k], out["radial"][k] = res[6:9]
+        certified.count(n, len(rows))
     return out

@@ -56,8 +56,9 @@ import numpy as np
 from numba import njit, prange
 from numba.core import types
 
+from . import _exact, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, pow2_scale
-from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, loop_views
+from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
 from .results import Feature
 
 NONE = int(Feature.NONE)
@@ -73,7 +74,8 @@ TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
 
 EBERLY = 0
 ROBUST = 1
-METHODS = {"eberly": EBERLY, "robust": ROBUST}
+CERTIFIED = 2
+METHODS = {"eberly": EBERLY, "robust": ROBUST, "certified": CERTIFIED}
 
 
 @njit(cache=True, error_model="numpy")
@@ -446,14 +448,20 @@ def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
 def single(out, method, v, p):
     """One query, written to ``out[:9]``: the fast path for one point and one shape.
 
-    ``v`` holds the nine vertex coordinates and ``p`` the point.
+    ``v`` holds the nine vertex coordinates and ``p`` the point; ``out[9]``
+    is set to 1 where the certified method needs its exact fallback.
     """
     px, py, pz = p[0], p[1], p[2]
+    out[9] = 0.0
     if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-        out[:] = math.nan
+        out[:9] = math.nan
         out[5] = NONE
     elif method == ROBUST:
         out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = robust(
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
+        )
+    elif method == CERTIFIED:
+        out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = certified.triangle(
             v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
         )
     else:
@@ -462,19 +470,65 @@ def single(out, method, v, p):
         )
 
 
-@njit(inline="always")
-def _store(r, q, res):
-    r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
+def exact_row(row, vertices, point):
+    """Redo a fast-path row with the certified method's exact fallback."""
+    row[:9] = _exact.triangle(vertices.reshape(3, 3), point)
+    row[9] = 0.0
 
 
 BLOCK = 128  # queries gathered into structure-of-arrays form at a time
+
+
+@njit(cache=True, error_model="numpy")
+def _robust_block(a, r):
+    """Robust queries of a gathered block: ``a`` holds the nine vertex
+    coordinates and the point in its rows, one query per column; ``r[:9]``
+    receives the results and ``r[9]`` whether the query was in the safe
+    window (the others are redone on the scalar path).
+
+    The loop runs over a scratch array allocated here, with a constant
+    length, so that its strides and trip count are known to the compiler,
+    which can then prove inputs and outputs independent and vectorise.
+    """
+    z = np.empty((22, BLOCK))
+    z[:12] = a
+    for q in range(BLOCK):
+        px, py, pz = z[9, q], z[10, q], z[11, q]
+        ax, ay, az = z[0, q] - px, z[1, q] - py, z[2, q] - pz
+        bx, by, bz = z[3, q] - px, z[4, q] - py, z[5, q] - pz
+        cx, cy, cz = z[6, q] - px, z[7, q] - py, z[8, q] - pz
+        _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
+        res = _finish(
+            _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
+            1.0, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz,
+        )  # fmt: skip
+        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
+        z[21, q] = ok
+    r[:] = z[12:]
+
+
+@njit(cache=True, error_model="numpy")
+def _eberly_block(a, r):
+    """:func:`_robust_block` for the seed's method; ``r[9]`` flags finite points."""
+    z = np.empty((22, BLOCK))
+    z[:12] = a
+    for q in range(BLOCK):
+        res = _eberly_query(
+            z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
+            z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q],
+        )  # fmt: skip
+        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
+        z[21, q] = math.isfinite(z[9, q]) & math.isfinite(z[10, q]) & math.isfinite(z[11, q])
+    r[:] = z[12:]
+
+
 _SIGNATURE = types.void(
-    types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, types.boolean
+    types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
 )
 
 
 @njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
-def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
+def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
@@ -482,16 +536,19 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
     ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and the
     other outputs may be empty.
 
-    Queries are processed in blocks: gathered into contiguous rows, so that
-    the robust core runs as SIMD code over the block, then scattered.  Rows
-    that the core cannot take (differences outside the safe window, or a
-    non-finite point) are redone one by one on the scalar path.
+    Queries are processed in blocks: gathered into contiguous rows, computed
+    by a SIMD loop (:func:`_robust_block`, :func:`_eberly_block`,
+    :func:`certified.triangle_block`), then scattered.  Rows that loop
+    cannot take (differences outside the safe window, a non-finite point, a
+    certified query left undecided) are redone one by one on the scalar
+    path; the certified method flags in ``exact`` the rows that even that
+    could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        a = np.empty((12, BLOCK))
+        a = np.zeros((12, BLOCK))  # zeros: the tail of the last block is computed too
         r = np.empty((10, BLOCK))
         i = k0 // n_j
         j = k0 - i * n_j
@@ -505,15 +562,19 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
                 i += 1
                 j = 0
         if method == ROBUST:
-            for q in range(nb):
-                px, py, pz = a[9, q], a[10, q], a[11, q]
-                ax, ay, az = a[0, q] - px, a[1, q] - py, a[2, q] - pz
-                bx, by, bz = a[3, q] - px, a[4, q] - py, a[5, q] - pz
-                cx, cy, cz = a[6, q] - px, a[7, q] - py, a[8, q] - pz
-                _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
-                res = _finish(
-                    _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
-                    1.0,
+            _robust_block(a, r)
+        elif method == CERTIFIED:
+            certified.triangle_block(a, r)
+        else:
+            _eberly_block(a, r)
+        for q in range(nb):
+            if r[9, q] != 0.0:
+                continue
+            px, py, pz = a[9, q], a[10, q], a[11, q]
+            if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+                res = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
+            elif method == CERTIFIED:
+                cert = certified.triangle(
                     a[0, q],
                     a[1, q],
                     a[2, q],
@@ -527,35 +588,8 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
                     py,
                     pz,
                 )
-                _store(r, q, res)
-                r[9, q] = ok
-        else:
-            for q in range(nb):
-                _store(
-                    r,
-                    q,
-                    _eberly_query(
-                        a[0, q],
-                        a[1, q],
-                        a[2, q],
-                        a[3, q],
-                        a[4, q],
-                        a[5, q],
-                        a[6, q],
-                        a[7, q],
-                        a[8, q],
-                        a[9, q],
-                        a[10, q],
-                        a[11, q],
-                    ),
-                )
-                r[9, q] = math.isfinite(a[9, q]) & math.isfinite(a[10, q]) & math.isfinite(a[11, q])
-        for q in range(nb):
-            if r[9, q] != 0.0:
-                continue
-            px, py, pz = a[9, q], a[10, q], a[11, q]
-            if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-                res = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
+                exact[k0 + q] = cert[0] != certified.CERTAIN
+                res = (cert[1], cert[2], cert[3], cert[4], cert[5], cert[6], cert[7], cert[8], cert[9])
             else:
                 res = robust(
                     a[0, q],
@@ -571,7 +605,7 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, full):
                     py,
                     pz,
                 )
-            _store(r, q, res)
+            r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
         for q in range(nb):
             k = k0 + q
             dist[k] = r[0, q]
@@ -598,5 +632,16 @@ def query(method, vertices, points, out_shape, full):
         feature=np.empty(m, np.int8),
         barycentric=np.empty((m, 3)),
     )
-    _batch(METHODS[method], V, P, n_j, *out.values(), full)
+    exact = np.zeros(n if method == "certified" else 0, np.bool_)
+    _batch(METHODS[method], V, P, n_j, *out.values(), exact, full)
+    if method == "certified":
+        rows = np.flatnonzero(exact)
+        for k in rows:
+            i, j = divmod(int(k), n_j)
+            res = _exact.triangle(V[i, j], P[i, j])
+            out["distance"][k] = res[0]
+            if full:
+                out["sqr_distance"][k], out["feature"][k] = res[1], res[5]
+                out["point"][k], out["barycentric"][k] = res[2:5], res[6:9]
+        certified.count(n, len(rows))
     return out

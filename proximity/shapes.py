@@ -11,11 +11,13 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from . import _counts
 from ._validate import as_float64, broadcast_batch, frozen, require_finite
 from .results import CircleResult, DiskResult, Result, TriangleResult
 
 DEFAULT_METHOD = "robust"
 _FLOAT64 = np.dtype(np.float64)
+_CERTIFIED = 2
 
 
 @runtime_checkable
@@ -47,8 +49,8 @@ class _Facade:
     """Shared query plumbing: points, method and output shape."""
 
     __slots__ = ()
-    methods = ("eberly", "robust")
-    _method_codes = {"eberly": 0, "robust": 1}
+    methods = ("eberly", "robust", "certified")
+    _method_codes = {"eberly": 0, "robust": 1, "certified": 2}
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable")
@@ -96,10 +98,20 @@ class _Facade:
             kernel = importlib.import_module(self._kernel_module).single
             # A compiled function binds like a method, hence staticmethod.
             type(self)._single_kernel = staticmethod(kernel)
-        row = np.empty(9)
+        row = np.empty(10)
         kernel(row, code, self._args, points)
+        if code == _CERTIFIED:
+            self._certified_row(row, points)
         row.setflags(write=False)
         return row
+
+    def _certified_row(self, row, point):
+        """Count a certified fast-path query, and finish it exactly if its
+        filter left it undecided."""
+        undecided = bool(row[9])
+        if undecided:
+            importlib.import_module(self._kernel_module).exact_row(row, self._args, point)
+        _counts.count(1, int(undecided))
 
     def distance(self, points, *, method=DEFAULT_METHOD):
         """Distance from each point to the shape; see :func:`proximity.distance`."""
@@ -124,8 +136,10 @@ class _Facade:
             and points.dtype is _FLOAT64
             and points.shape == (3,)
         ):
-            row = np.empty(9)
+            row = np.empty(10)
             kernel(row, code, self._args, points)
+            if code == _CERTIFIED:
+                self._certified_row(row, points)
             row.setflags(write=False)
             return self._result._from_row(row)
         row = self._single(points, method)

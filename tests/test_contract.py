@@ -28,7 +28,7 @@ QUERIES = [
     pytest.param(lambda s, p, **kw: s.closest_point(p, **kw).distance, id="method.closest_point"),
     pytest.param(lambda s, p, **kw: s.distance(p, **kw), id="method.distance"),
 ]
-METHODS = ["robust", "eberly"]
+METHODS = ["robust", "eberly", "certified"]
 
 
 def points_for(shape, lead, seed=0):

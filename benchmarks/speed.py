@@ -1,0 +1,314 @@
+"""Speed of the compiled kernels, side by side with the libraries people use.
+
+Every ratio is measured in one run, on the same inputs, as the median of at
+least five repeats; nothing is compared with a number from another run.
+
+    python -m benchmarks.speed [--quick] [--json FILE]
+
+Rows:
+
+1. 1M well-conditioned (point, triangle) pairs: ``closest_point`` and
+   ``distance`` against ``trimesh.triangles.closest_point`` plus the norm.
+2. 1M points against one triangle: the same.
+3. 1M points against one disk and one circle: against the vectorised NumPy
+   formula (project onto the plane, then ``hypot``).
+4. One point against one prebuilt triangle in a Python loop: ``closest_point``
+   against ``fcl.distance`` with a one-triangle ``BVHModel`` and a
+   ``Sphere(0)`` moved to the point.
+5. Peak memory of a 10M-pair query, above its inputs, against the size of its
+   outputs plus 64 MB.
+6. Start-up: ``import proximity``, and a new process's first result with the
+   compiled kernels cached on disk.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import proximity
+from benchmarks import scenes
+
+REPEATS = 5
+
+
+def median_time(fn, repeats=REPEATS):
+    """Median wall time of ``fn()`` over ``repeats`` runs, after one warm-up."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def trimesh_pairs(vertices, points):
+    """trimesh's vectorised closest point, plus the norm for the distance."""
+    from trimesh.triangles import closest_point
+
+    closest = closest_point(vertices, points)
+    return closest, np.linalg.norm(points - closest, axis=1)
+
+
+def numpy_round(center, normal, radius, points, disk):
+    """Distance and closest point to a circle or disk, as a plain NumPy formula."""
+    unit = normal / np.linalg.norm(normal)
+    d = points - center
+    h = d @ unit
+    radial = d - h[:, None] * unit
+    q = np.linalg.norm(radial, axis=1)
+    distance = np.hypot(h, q - radius)
+    closest = center + radius * radial / q[:, None]
+    if disk:
+        inside = q <= radius
+        distance = np.where(inside, np.abs(h), distance)
+        closest = np.where(inside[:, None], center + radial, closest)
+    return distance, closest
+
+
+def _row(name, ours, theirs, n, target, unit="queries/s"):
+    return {
+        "case": name,
+        "ours": n / ours,
+        "baseline": n / theirs,
+        "ratio": theirs / ours,
+        "target": target,
+        "unit": unit,
+    }
+
+
+def triangle_rows(n, repeats):
+    """Rows 1 and 2: pairs and one triangle against trimesh."""
+    rows = []
+    scene = scenes.well_conditioned(np.random.default_rng(0), n)
+    one = np.broadcast_to(scene.vertices[0], scene.vertices.shape)
+    for label, vertices, shape in (
+        (f"{n:,} pairs", scene.vertices, proximity.Triangle(scene.vertices)),
+        (f"{n:,} points, one triangle", one, proximity.Triangle(scene.vertices[0])),
+    ):
+        theirs = median_time(lambda v=vertices: trimesh_pairs(v, scene.points), repeats)
+        for method, target in (("robust", 15.0), ("eberly", 25.0)):
+            for call in ("closest_point", "distance"):
+                query = getattr(shape, call)
+                ours = median_time(lambda q=query, m=method: q(scene.points, method=m), repeats)
+                rows.append(_row(f"{label}: {method} {call} vs trimesh + norm", ours, theirs, n, target))
+    return rows
+
+
+def round_rows(n, repeats):
+    """Row 3: one disk and one circle against the NumPy formula."""
+    rows = []
+    scene = scenes.disk_well_conditioned(np.random.default_rng(1), n)
+    center, normal, radius = scene.center[0], scene.normal[0], float(scene.radius[0])
+    for kind, cls in (("disk", proximity.Disk), ("circle", proximity.Circle)):
+        shape = cls(center, normal, radius)
+        theirs = median_time(
+            lambda d=(kind == "disk"): numpy_round(center, normal, radius, scene.points, d), repeats
+        )
+        for call in ("distance", "closest_point"):
+            query = getattr(shape, call)
+            ours = median_time(lambda q=query: q(scene.points), repeats)
+            rows.append(
+                _row(f"{n:,} points, one {kind}: robust {call} vs NumPy formula", ours, theirs, n, 10.0)
+            )
+    return rows
+
+
+def loop_row(n, repeats):
+    """Row 4: the narrow-phase call in a Python loop, against fcl."""
+    import fcl
+
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.2, 0.9, 0.1]])
+    points = list(np.random.default_rng(2).uniform(-0.5, 1.5, size=(n, 3)))
+    model = fcl.BVHModel()
+    model.beginModel(3, 1)
+    model.addSubModel(vertices, np.array([[0, 1, 2]]))
+    model.endModel()
+    triangle = fcl.CollisionObject(model, fcl.Transform())
+    probe = fcl.CollisionObject(fcl.Sphere(0.0), fcl.Transform())
+    request = fcl.DistanceRequest(enable_nearest_points=True)
+
+    def with_fcl():
+        for p in points:
+            probe.setTranslation(p)
+            fcl.distance(triangle, probe, request, fcl.DistanceResult())
+
+    shape = proximity.Triangle(vertices)
+
+    def with_proximity():
+        for p in points:
+            shape.closest_point(p)
+
+    theirs = median_time(with_fcl, repeats)
+    ours = median_time(with_proximity, repeats)
+    return [
+        _row(
+            "one point, one prebuilt triangle, Python loop: closest_point vs fcl.distance",
+            ours,
+            theirs,
+            n,
+            1.5,
+            unit="calls/s",
+        )
+    ]
+
+
+_MEMORY_CHILD = """
+import numpy as np, proximity
+n = {n}
+rng = np.random.default_rng(3)
+vertices = rng.random((n, 3, 3))
+points = rng.random((n, 3))
+shape = proximity.Triangle(vertices)
+proximity.Triangle(vertices[:1000]).closest_point(points[:1000])  # load the kernels before measuring
+def rss(field):
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) * 1024 for line in f if line.startswith(field))
+base = rss("VmRSS:")
+with open("/proc/self/clear_refs", "w") as f:
+    f.write("5")  # reset the peak to the current size
+r = shape.closest_point(points)
+out = sum(np.asarray(v).nbytes for v in vars(r).values())
+print(base, rss("VmHWM:"), out)
+"""
+
+
+def memory_row(n):
+    """Row 5: peak memory above the inputs, in a fresh process."""
+    child = subprocess.run(
+        [sys.executable, "-c", _MEMORY_CHILD.format(n=n)], capture_output=True, text=True, check=True
+    )
+    base, peak, outputs = map(int, child.stdout.split())
+    extra = peak - base - outputs
+    return {
+        "case": f"peak memory of a {n:,}-pair query above inputs",
+        "ours": (peak - base) / 2**20,
+        "baseline": (outputs + 64 * 2**20) / 2**20,
+        "ratio": extra / 2**20,
+        "target": 64.0,
+        "unit": "MB (allowed: outputs + 64 MB; ratio column: MB beyond the outputs)",
+    }
+
+
+def _process_time(code, env=None):
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True)
+    return time.perf_counter() - start
+
+
+def startup_rows(repeats):
+    """Row 6: import time, first result with a warm cache, and compile time."""
+    first = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros((10, 3)))"
+    single = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))"
+    disk = (
+        "import numpy as np, proximity; "
+        "proximity.Disk(np.zeros(3), np.ones(3), 1).closest_point(np.zeros((10, 3)))"
+    )
+    _process_time(first), _process_time(single), _process_time(disk)  # warm the on-disk cache
+    rows = []
+    for label, code, limit in (
+        ("python -c 'import proximity'", "import proximity", 0.5),
+        ("new process, first batch result (triangles, cache warm)", first, 1.0),
+        ("new process, first single-point result (cache warm)", single, 1.0),
+        ("new process, first batch result (disks, cache warm)", disk, 1.0),
+    ):
+        seconds = float(np.median([_process_time(code) for _ in range(repeats)]))
+        rows.append(
+            {
+                "case": label,
+                "ours": seconds,
+                "baseline": limit,
+                "ratio": seconds / limit,
+                "target": 1.0,
+                "unit": "s (ratio column: fraction of the limit)",
+            }
+        )
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        seconds = _process_time(first + "; " + single.split("; ", 1)[1] + "; " + disk.split("; ", 1)[1], env)
+    rows.append(
+        {
+            "case": "first run ever: compile every kernel (empty cache)",
+            "ours": seconds,
+            "baseline": None,
+            "ratio": None,
+            "target": None,
+            "unit": "s",
+        }
+    )
+    return rows
+
+
+def passed(row):
+    """Whether a row meets its target (None where there is none)."""
+    if row["target"] is None:
+        return None
+    if row["unit"].startswith("MB"):
+        return row["ratio"] <= row["target"]
+    if row["unit"].startswith("s"):
+        return row["ratio"] <= 1.0
+    return row["ratio"] >= row["target"]
+
+
+def format_table(rows):
+    """The rows as a markdown table."""
+    lines = ["| case | proximity | baseline | ratio | target | met |", "|---|---:|---:|---:|---:|:---:|"]
+    for row in rows:
+        unit = row["unit"]
+        if unit in ("queries/s", "calls/s"):
+            ours, base = f"{row['ours'] / 1e6:.2f} M{unit}", f"{row['baseline'] / 1e6:.3f} M{unit}"
+            ratio, target = f"{row['ratio']:.1f}x", f">= {row['target']:g}x"
+        elif unit.startswith("MB"):
+            ours, base = f"{row['ours']:.0f} MB", f"{row['baseline']:.0f} MB allowed"
+            ratio, target = f"+{row['ratio']:.1f} MB", "<= +64 MB"
+        else:
+            ours = f"{row['ours']:.2f} s"
+            base = "" if row["baseline"] is None else f"limit {row['baseline']:g} s"
+            ratio = "" if row["ratio"] is None else f"{row['ratio']:.2f}"
+            target = "" if row["target"] is None else "<= 1"
+        met = {True: "yes", False: "**no**", None: ""}[passed(row)]
+        lines.append(f"| {row['case']} | {ours} | {base} | {ratio} | {target} | {met} |")
+    return "\n".join(lines)
+
+
+def run(quick=False):
+    """Measure every row; ``quick`` shrinks the sizes for a smoke run."""
+    n = 100_000 if quick else 1_000_000
+    repeats = 3 if quick else REPEATS
+    rows = triangle_rows(n, repeats) + round_rows(n, repeats)
+    rows += loop_row(2_000 if quick else 20_000, repeats)
+    rows.append(memory_row(1_000_000 if quick else 10_000_000))
+    rows += startup_rows(3 if quick else REPEATS)
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
+    parser.add_argument("--json", help="also write the rows to this file")
+    args = parser.parse_args(argv)
+    rows = run(args.quick)
+    text = format_table(rows)
+    header = f"numba threads: {proximity_threads()}; median of {3 if args.quick else REPEATS} repeats\n\n"
+    print(header + text)
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+    return header + text
+
+
+def proximity_threads():
+    """Threads the compiled kernels run on."""
+    import numba
+
+    return numba.get_num_threads()
+
+
+if __name__ == "__main__":
+    main()

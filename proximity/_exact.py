@@ -1,0 +1,216 @@
+"""Exact fallback of the certified method: rational arithmetic in Python.
+
+Used only for the queries the filtered float path cannot decide (points
+within rounding of a region boundary or on the shape, degenerate triangles),
+so its speed matters little.  Every float is taken at its exact binary value
+(``Fraction(float)`` is exact).
+
+Triangles run the seed's region algorithm (Listings 1-8) exactly, which is
+correct in rational arithmetic for every non-degenerate triangle; a
+zero-area triangle is the segment hull of its edges.  Square roots are taken
+with integer square roots: to a precision fixed in advance where the value is
+rational, and with refinement until the rounding is decided where it is not
+(a circle's rim).
+"""
+
+import math
+from fractions import Fraction
+from math import isqrt
+
+from .results import Feature
+
+_MAX = Fraction(float.fromhex("0x1.fffffffffffffp+1023"))
+
+
+def _float(x):
+    """The float nearest a Fraction (correctly rounded), inf beyond the range."""
+    if abs(x) > _MAX:
+        return math.copysign(math.inf, x)
+    return float(x)
+
+
+def _sqrt_bounds(x, bits):
+    """``(lo, hi)`` with ``lo <= sqrt(x) <= hi`` and ``hi - lo`` about ``2^-bits sqrt(x)``."""
+    n, d = x.numerator, x.denominator
+    # Scale by 4^k so that the integer square root has about `bits` bits.
+    k = (2 * bits - (n.bit_length() - d.bit_length())) // 2 + 1
+    if k >= 0:
+        root = isqrt(n * 4**k // d)
+    else:
+        root = isqrt(n // (d * 4 ** (-k)))
+    scale = Fraction(2) ** -k
+    return root * scale, (root + 1) * scale
+
+
+def faithful_sqrt(lo2, hi2=None):
+    """A float within one ulp of ``sqrt(x)`` for every ``x`` in ``[lo2, hi2]``.
+
+    ``lo2 == hi2`` (the default) is an exact square; otherwise returns None
+    when the interval is too wide to decide the rounding.
+    """
+    hi2 = lo2 if hi2 is None else hi2
+    if hi2 == 0:
+        return 0.0
+    lo, _ = _sqrt_bounds(lo2, 80) if lo2 > 0 else (Fraction(0), None)
+    _, hi = _sqrt_bounds(hi2, 80)
+    r = _float((lo + hi) / 2)
+    if math.isinf(r):
+        return r if lo > _MAX else None
+    below, above = Fraction(math.nextafter(r, 0.0)), Fraction(math.nextafter(r, math.inf))
+    if below**2 < lo2 and hi2 < above**2:
+        return r
+    return None
+
+
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
+def _sub(a, b):
+    return [x - y for x, y in zip(a, b, strict=True)]
+
+
+def _on_open_segment(x, a, b):
+    """Whether ``x`` lies strictly inside the non-degenerate segment ``ab``."""
+    e = _sub(b, a)
+    ee = _dot(e, e)
+    if ee == 0:
+        return False
+    t = _dot(_sub(x, a), e) / ee
+    return 0 < t < 1 and all(a[i] + t * e[i] == x[i] for i in range(len(x)))
+
+
+def _seed_region(d, a, b, c, e):
+    """Listings 1-8 in exact arithmetic, for ``det = ac - b^2 > 0``; ``(s, t)``."""
+    det = a * c - b * b
+    s = b * e - c * d
+    t = b * d - a * e
+    zero, one = Fraction(0), Fraction(1)
+    if s + t <= det:
+        if s < 0 and t < 0:  # region 4
+            if d < 0:
+                return (one if -d >= a else -d / a), zero
+            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+        if s < 0:  # region 3
+            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+        if t < 0:  # region 5
+            return (zero if d >= 0 else one if -d >= a else -d / a), zero
+        return s / det, t / det  # region 0
+    if s < 0:  # region 2
+        tmp0, tmp1 = b + d, c + e
+        if tmp1 > tmp0:
+            numer, denom = tmp1 - tmp0, a - 2 * b + c
+            s = one if numer >= denom else numer / denom
+            return s, one - s
+        return zero, (one if tmp1 <= 0 else zero if e >= 0 else -e / c)
+    if t < 0:  # region 6
+        tmp0, tmp1 = b + e, a + d
+        if tmp1 > tmp0:
+            numer, denom = tmp1 - tmp0, a - 2 * b + c
+            t = one if numer >= denom else numer / denom
+            return one - t, t
+        return (one if tmp1 <= 0 else zero if d >= 0 else -d / a), zero
+    numer = (c + e) - (b + d)  # region 1
+    if numer <= 0:
+        s = zero
+    else:
+        denom = a - 2 * b + c
+        s = one if numer >= denom else numer / denom
+    return s, one - s
+
+
+def triangle(vertices, point):
+    """Exact point-triangle query for 3D float inputs.
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with the
+    distance faithfully rounded, the rest correctly rounded, and the feature
+    the lowest-coded one whose relative interior holds the closest point.
+    """
+    v = [[Fraction(float(c)) for c in row] for row in vertices]
+    p = [Fraction(float(c)) for c in point]
+    e0, e1 = _sub(v[1], v[0]), _sub(v[2], v[0])
+    a, b, c = _dot(e0, e0), _dot(e0, e1), _dot(e1, e1)
+    dvec = _sub(v[0], p)
+    d, e = _dot(e0, dvec), _dot(e1, dvec)
+    if a * c - b * b > 0:
+        s, t = _seed_region(d, a, b, c, e)
+        closest = [v[0][i] + s * e0[i] + t * e1[i] for i in range(3)]
+    else:
+        # Zero area: the triangle is the hull of its edges, a segment or a point.
+        best = None
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            edge = _sub(v[j], v[i])
+            ee = _dot(edge, edge)
+            u = min(max(_dot(_sub(p, v[i]), edge) / ee, Fraction(0)), Fraction(1)) if ee else Fraction(0)
+            x = [v[i][k] + u * edge[k] for k in range(3)]
+            dist2 = _dot(_sub(x, p), _sub(x, p))
+            if best is None or dist2 < best[0]:
+                best = (dist2, x)
+        closest = best[1]
+    sqr = _dot(_sub(closest, p), _sub(closest, p))
+
+    # The feature whose relative interior holds the closest point, lowest code first.
+    zero, one = Fraction(0), Fraction(1)
+    if closest in v:
+        k = v.index(closest)
+        feature, bary = Feature.VERTEX0 + k, [one if i == k else zero for i in range(3)]
+    else:
+        feature, bary = Feature.FACE, None
+        for code, (i, j) in ((Feature.EDGE01, (0, 1)), (Feature.EDGE12, (1, 2)), (Feature.EDGE20, (2, 0))):
+            if _on_open_segment(closest, v[i], v[j]):
+                edge = _sub(v[j], v[i])
+                u = _dot(_sub(closest, v[i]), edge) / _dot(edge, edge)
+                feature, bary = code, [zero] * 3
+                bary[i], bary[j] = 1 - u, u
+                break
+        if bary is None:
+            bary = [1 - s - t, s, t]
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x) for x in closest),
+        int(feature),
+        *(_float(w) for w in bary),
+    )
+
+
+def round_shape(is_disk, center, normal, radius, point, robust_point):
+    """Exact point-circle or point-disk query for float inputs.
+
+    ``robust_point`` supplies the closest point where it is not rational (a
+    rim point), from the robust method.  Returns ``(distance, sqr_distance, x,
+    y, z, feature, equidistant, height, radial)``.
+    """
+    c = [Fraction(float(x)) for x in center]
+    n = [Fraction(float(x)) for x in normal]
+    r = Fraction(float(radius))
+    dvec = _sub([Fraction(float(x)) for x in point], c)
+    nn = _dot(n, n)
+    nd = _dot(n, dvec)
+    h2 = nd * nd / nn
+    q2 = _dot(dvec, dvec) - h2
+    face = is_disk and q2 <= r * r
+    height = math.copysign(faithful_sqrt(h2), nd)
+    radial = faithful_sqrt(q2)
+    if face:
+        dist, sqr = faithful_sqrt(h2), _float(h2)
+        closest = [c[i] + dvec[i] - nd * n[i] / nn for i in range(3)]
+        x, y, z = (_float(v) for v in closest)
+        feature = Feature.FACE
+    else:
+        if h2 == 0 and q2 == r * r:
+            dist, sqr = 0.0, 0.0
+        else:
+            # d^2 = h^2 + (q - R)^2 with q irrational: narrow q until d rounds one way.
+            bits, dist = 64, None
+            while dist is None:
+                q_lo, q_hi = _sqrt_bounds(q2, bits) if q2 else (Fraction(0), Fraction(0))
+                w = sorted([abs(q_lo - r), abs(q_hi - r)])
+                lo2 = h2 + (0 if q_lo <= r <= q_hi else w[0]) ** 2
+                hi2 = h2 + w[1] ** 2
+                dist = faithful_sqrt(lo2, hi2)
+                bits *= 2
+            sqr = _float((lo2 + hi2) / 2)
+        x, y, z = robust_point
+        feature = Feature.RIM
+    return dist, sqr, x, y, z, int(feature), (not is_disk) and q2 == 0, height, radial

@@ -1,0 +1,574 @@
+"""Certified distances: faithfully rounded, with the exact closest feature.
+
+``method="certified"`` returns, for every finite input, a distance that is one
+of the two float64 values bracketing the exact distance ``d*`` (so
+``|d - d*| < ulp(d*)``), the exact closest feature, and exactly 0 for a point
+on the shape.  It is a filtered computation:
+
+1. **Predicates in float, with semi-static error bounds.**  Which feature is
+   closest (a vertex, the interior of an edge, the face) is decided by the
+   signs of six dot products and three edge functions (for a disk, by
+   ``q^2 <= R^2``), each evaluated in float64 together with a rigorous bound
+   on its rounding error: ``(k + n + margin) u F``, where ``F`` is the same
+   expression evaluated on absolute values, ``k`` its degree in the inputs
+   (the rounded coordinate differences) and ``n`` the depth of its
+   evaluation.  A sign is taken only when the value exceeds its bound.
+2. **The squared distance to that feature in double-double** (about 106
+   bits, :mod:`._dd`), from the exact differences ``V - P`` (an error-free
+   subtraction), by formulas without cancellation where possible: ``|X|^2``
+   for a vertex, ``|A x B|^2 / |B - A|^2`` for an edge, ``(A . (B x C))^2 /
+   |n|^2`` for the face, ``h^2 + (q - R)^2`` for a rim.  Each carries a bound
+   ``delta`` built from the error bounds of the double-double operations.
+3. **A rounding check.**  ``r``, the float nearest ``sqrt(s)``, is faithful
+   when ``pred(r)^2 < s - delta`` and ``s + delta < succ(r)^2``, compared
+   exactly with error-free products.
+
+Where a sign is undecided (a point within rounding of a region boundary, a
+degenerate triangle, a point on the shape) or the rounding check fails, the
+query falls back to exact rational arithmetic (:mod:`._exact`), refining a
+square root's precision until the rounding is decided.  The fallback counts
+are available from :func:`stats`.
+
+Ties between features (possible only for degenerate triangles, where the
+closest point lies inside several features) go to the lowest
+:class:`~proximity.Feature` code, that is the lowest-dimensional feature and
+then the lowest index.
+"""
+
+import math
+
+import numpy as np
+from numba import literal_unroll, njit
+
+from . import _dd as dd
+from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
+from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, fma, pow2_scale
+from .point_circle import decompose, rim_direction
+from .results import Feature
+
+U = 2.0**-53
+SLACK = 2.0**-990  # absolute slack, in the scaled frame: covers underflowed terms
+# Error bound factors, in units of u, for predicates of degree 2 and 4 in the
+# coordinate differences (degree + evaluation depth + a margin).
+PRED2 = 16.0 * U
+PRED4 = 40.0 * U
+
+CERTAIN = 0.0
+EXACT = 1.0
+
+
+NONE = int(Feature.NONE)
+VERTEX0 = int(Feature.VERTEX0)
+VERTEX1 = int(Feature.VERTEX1)
+VERTEX2 = int(Feature.VERTEX2)
+EDGE01 = int(Feature.EDGE01)
+EDGE12 = int(Feature.EDGE12)
+EDGE20 = int(Feature.EDGE20)
+FACE = int(Feature.FACE)
+RIM = int(Feature.RIM)
+
+
+@njit(inline="always", error_model="numpy")
+def _sign(value, bound):
+    """+1 or -1 when ``|value| > bound``, else 0 (undecided)."""
+    bound = bound * (1.0 + 1e-12) + SLACK
+    return 1 if value > bound else (-1 if value < -bound else 0)
+
+
+@njit(inline="always", error_model="numpy")
+def _both(s1, s2, want1, want2):
+    """Three-valued AND of two signs: 1 true, 0 undecided, -1 false."""
+    false = ((s1 != 0) & (s1 != want1)) | ((s2 != 0) & (s2 != want2))
+    return -1 if false else (1 if (s1 == want1) & (s2 == want2) else 0)
+
+
+@njit(inline="always", error_model="numpy")
+def _cross_abs(ax, ay, az, bx, by, bz):
+    return ay * bz + az * by, az * bx + ax * bz, ax * by + ay * bx
+
+
+@njit(inline="always", error_model="numpy")
+def _faithful_sqrt(sh, sl, delta):
+    """``(ok, r, s)``: ``r`` is ``sqrt(sh + sl)`` rounded to a float, ``ok``
+    when ``r`` is faithful for every value within ``delta`` of ``sh + sl``;
+    ``s`` is the square rounded to a float.
+
+    One Newton step on the exact residual puts ``r`` within ``(1/2 + 2^-50)
+    ulp`` of ``sqrt(sh + sl)``, and ``ulp(r) > 2^-53 r``, so ``r`` is
+    faithful whenever ``delta < 2^-54 (sh + sl)``: the rest of the ulp then
+    covers the error of ``s`` (half an ulp below a power of two included).
+    """
+    positive = sh > 0.0
+    h = sh if positive else 1.0
+    r = math.sqrt(h)
+    r = r + ((fma(-r, r, h) + (sl if positive else 0.0)) / (2.0 * r))
+    ok = positive & (delta * (1.0 + 1e-9) + SLACK < h * 2.0**-54)
+    ok = ok | ((sh == 0.0) & (sl == 0.0) & (delta == 0.0))
+    return ok, r if positive else 0.0, sh + sl if positive else 0.0
+
+
+@njit(inline="always", error_model="numpy")
+def _sum_sq(xh, xl, yh, yl, zh, zl):
+    """``x^2 + y^2 + z^2`` of double-doubles, with ``delta`` (no cancellation)."""
+    s1h, s1l = dd.sqr(xh, xl)
+    s2h, s2l = dd.sqr(yh, yl)
+    s3h, s3l = dd.sqr(zh, zl)
+    sh, sl = dd.add(s1h, s1l, s2h, s2l)
+    sh, sl = dd.add(sh, sl, s3h, s3l)
+    # Squares that underflowed to zero are not a certain zero.
+    underflow = (sh == 0.0) & ((xh != 0.0) | (yh != 0.0) | (zh != 0.0))
+    return sh, sl, math.inf if underflow else 16.0 * U * U * abs(sh)
+
+
+@njit(inline="always", error_model="numpy")
+def _cross_dd(ah, al, bh, bl, ch, cl, dh, dl):
+    """``a * d - b * c`` of double-doubles, and a bound on its error."""
+    p1h, p1l = dd.mul(ah, al, dh, dl)
+    p2h, p2l = dd.mul(bh, bl, ch, cl)
+    rh, rl = dd.sub(p1h, p1l, p2h, p2l)
+    return rh, rl, 16.0 * U * U * (abs(p1h) + abs(p2h))
+
+
+@njit(inline="always", error_model="numpy")
+def _cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
+    """``(x, y, z) x (p, q, r)`` in double-double, with per-component bounds."""
+    cxh, cxl, ex = _cross_dd(yh, yl, zh, zl, qh, ql, rh, rl)
+    cyh, cyl, ey = _cross_dd(zh, zl, xh, xl, rh, rl, ph, pl)
+    czh, czl, ez = _cross_dd(xh, xl, yh, yl, ph, pl, qh, ql)
+    return cxh, cxl, cyh, cyl, czh, czl, ex, ey, ez
+
+
+@njit(inline="always", error_model="numpy")
+def _norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
+    """``|c|^2`` of a double-double vector whose components err by ``e*``."""
+    sh, sl, d = _sum_sq(xh, xl, yh, yl, zh, zl)
+    d += 2.0 * (abs(xh) * ex + abs(yh) * ey + abs(zh) * ez) + ex * ex + ey * ey + ez * ez
+    return sh, sl, d
+
+
+@njit(inline="always", error_model="numpy")
+def _ratio(nh, nl, dn, mh, ml, dm):
+    """``n / m`` and its error bound, from the bounds of both."""
+    qh, ql = dd.div(nh, nl, mh, ml)
+    rel = dn / abs(nh) + dm / abs(mh) + 32.0 * U * U
+    return qh, ql, 2.0 * rel * abs(qh) if nh != 0.0 else math.inf
+
+
+@njit(inline="always", error_model="numpy")
+def _classify(ax, ay, az, bx, by, bz, cx, cy, cz, e0x, e0y, e0z, e1x, e1y, e1z, e2x, e2y, e2z):
+    """The exact closest feature from float predicates, or NONE if undecided.
+
+    ``a, b, c`` are the vertices relative to ``P`` and ``e0 = V1 - V0``,
+    ``e1 = V2 - V0``, ``e2 = V2 - V1`` the edges, all rounded once from exact
+    values; each bound covers that rounding as a relative perturbation of
+    the inputs, so it scales with the triangle's edges, not with the
+    distance to it.
+    """
+    Ax, Ay, Az = abs(ax), abs(ay), abs(az)
+    Bx, By, Bz = abs(bx), abs(by), abs(bz)
+    Cx, Cy, Cz = abs(cx), abs(cy), abs(cz)
+    E0x, E0y, E0z = abs(e0x), abs(e0y), abs(e0z)
+    E1x, E1y, E1z = abs(e1x), abs(e1y), abs(e1z)
+    E2x, E2y, E2z = abs(e2x), abs(e2y), abs(e2z)
+    # (P - X) . (Y - X) for each vertex X and each edge XY through it.
+    ab_a = _sign(-(ax * e0x + ay * e0y + az * e0z), PRED2 * (Ax * E0x + Ay * E0y + Az * E0z))
+    ab_b = _sign(bx * e0x + by * e0y + bz * e0z, PRED2 * (Bx * E0x + By * E0y + Bz * E0z))
+    bc_b = _sign(-(bx * e2x + by * e2y + bz * e2z), PRED2 * (Bx * E2x + By * E2y + Bz * E2z))
+    bc_c = _sign(cx * e2x + cy * e2y + cz * e2z, PRED2 * (Cx * E2x + Cy * E2y + Cz * E2z))
+    ca_c = _sign(cx * e1x + cy * e1y + cz * e1z, PRED2 * (Cx * E1x + Cy * E1y + Cz * E1z))
+    ca_a = _sign(-(ax * e1x + ay * e1y + az * e1z), PRED2 * (Ax * E1x + Ay * E1y + Az * E1z))
+    # Edge functions n . (X x E), as in the robust method, with their bounds.
+    nx, ny, nz = e0y * e1z - e0z * e1y, e0z * e1x - e0x * e1z, e0x * e1y - e0y * e1x
+    Nx, Ny, Nz = _cross_abs(E0x, E0y, E0z, E1x, E1y, E1z)
+    kx, ky, kz = ay * e0z - az * e0y, az * e0x - ax * e0z, ax * e0y - ay * e0x
+    Kx, Ky, Kz = _cross_abs(Ax, Ay, Az, E0x, E0y, E0z)
+    wc = _sign(nx * kx + ny * ky + nz * kz, PRED4 * (Nx * Kx + Ny * Ky + Nz * Kz))
+    kx, ky, kz = by * e2z - bz * e2y, bz * e2x - bx * e2z, bx * e2y - by * e2x
+    Kx, Ky, Kz = _cross_abs(Bx, By, Bz, E2x, E2y, E2z)
+    wa = _sign(nx * kx + ny * ky + nz * kz, PRED4 * (Nx * Kx + Ny * Ky + Nz * Kz))
+    kx, ky, kz = cy * e1z - cz * e1y, cz * e1x - cx * e1z, cx * e1y - cy * e1x
+    Kx, Ky, Kz = _cross_abs(Cx, Cy, Cz, E1x, E1y, E1z)
+    wb = -_sign(nx * kx + ny * ky + nz * kz, PRED4 * (Nx * Kx + Ny * Ky + Nz * Kz))
+    # The regions, in feature-code order: the first that certainly holds is
+    # the closest feature, and an undecided one before it leaves it open.
+    # Selects rather than branches, so that a loop of queries vectorises.
+    holds = (
+        _both(ab_a, ca_a, -1, -1),
+        _both(ab_b, bc_b, -1, -1),
+        _both(bc_c, ca_c, -1, -1),
+        min(_both(ab_a, ab_b, 1, 1), _both(wc, wc, -1, -1)),
+        min(_both(bc_b, bc_c, 1, 1), _both(wa, wa, -1, -1)),
+        min(_both(ca_c, ca_a, 1, 1), _both(wb, wb, -1, -1)),
+        min(_both(wa, wb, 1, 1), _both(wc, wc, 1, 1)),
+    )
+    result = NONE
+    still_open = True
+    for feature in literal_unroll((0, 1, 2, 3, 4, 5, 6)):
+        result = feature if still_open & (holds[feature] == 1) else result
+        still_open = still_open & (holds[feature] == -1)
+    return result
+
+
+@njit(inline="always", error_model="numpy")
+def _scale_exact(x, f1, f2):
+    """``x * f1 * f2`` and whether that was exact (no underflow)."""
+    y = x * f1 * f2
+    return y, (y / f2) / f1 == x
+
+
+@njit(inline="always", error_model="numpy")
+def _dd_vec(x0, y0, z0, x1, y1, z1):
+    """``(x1, y1, z1) - (x0, y0, z0)``, exactly, as three double-doubles."""
+    xh, xl = dd.diff(x1, x0)
+    yh, yl = dd.diff(y1, y0)
+    zh, zl = dd.diff(z1, z0)
+    return xh, xl, yh, yl, zh, zl
+
+
+@njit(inline="always", error_model="numpy")
+def _scale_vec(v, f1, f2):
+    """A double-double vector times ``f1 * f2``, and whether that was exact."""
+    xh, o1 = _scale_exact(v[0], f1, f2)
+    xl, o2 = _scale_exact(v[1], f1, f2)
+    yh, o3 = _scale_exact(v[2], f1, f2)
+    yl, o4 = _scale_exact(v[3], f1, f2)
+    zh, o5 = _scale_exact(v[4], f1, f2)
+    zl, o6 = _scale_exact(v[5], f1, f2)
+    return (xh, xl, yh, yl, zh, zl), o1 & o2 & o3 & o4 & o5 & o6
+
+
+@njit(inline="always", error_model="numpy")
+def _dot_bounded(v, vh_err, w):
+    """``v . w`` of double-double vectors where ``v`` errs by ``vh_err``; ``(h, l, delta)``."""
+    t1h, t1l = dd.mul(v[0], v[1], w[0], w[1])
+    t2h, t2l = dd.mul(v[2], v[3], w[2], w[3])
+    t3h, t3l = dd.mul(v[4], v[5], w[4], w[5])
+    th, tl = dd.add(t1h, t1l, t2h, t2l)
+    th, tl = dd.add(th, tl, t3h, t3l)
+    delta = abs(w[0]) * vh_err[0] + abs(w[2]) * vh_err[1] + abs(w[4]) * vh_err[2]
+    return th, tl, delta + 16.0 * U * U * (abs(t1h) + abs(t2h) + abs(t3h))
+
+
+@njit(inline="always", error_model="numpy")
+def _sel(c, x, y):
+    """Element-wise ``x if c else y`` of two double-double vectors."""
+    return (
+        x[0] if c else y[0],
+        x[1] if c else y[1],
+        x[2] if c else y[2],
+        x[3] if c else y[3],
+        x[4] if c else y[4],
+        x[5] if c else y[5],
+    )
+
+
+@njit(inline="always", error_model="numpy")
+def triangle_local(a, b, c, e0, e1, e2):
+    """The certified query on exact differences in the safe window.
+
+    ``a, b, c`` are the vertices relative to ``P`` and ``e0, e1, e2`` the
+    edges ``V1 - V0``, ``V2 - V0``, ``V2 - V1``, each a double-double vector.
+    Returns ``(ok, distance, sqr_distance, x, y, z, feature, b0, b1, b2)``
+    with ``(x, y, z)`` relative to ``P`` (the caller puts vertices back
+    exactly).  The vertex, edge and face formulas are all evaluated, on the
+    vertex and edge the classification selects, and the answer selected, so
+    that a loop of queries vectorises.
+    """
+    feature = _classify(
+        a[0], a[2], a[4], b[0], b[2], b[4], c[0], c[2], c[4],
+        e0[0], e0[2], e0[4], e1[0], e1[2], e1[4], e2[0], e2[2], e2[4],
+    )  # fmt: skip
+
+    # Vertex: d^2 = |X|^2.
+    x = _sel(feature == VERTEX0, a, _sel(feature == VERTEX1, b, c))
+    vh, vl, dv = _sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
+
+    # Edge from X along E: d^2 = |X x E|^2 / |E|^2.
+    on01 = feature == EDGE01
+    on12 = feature == EDGE12
+    p = _sel(on01, a, _sel(on12, b, c))
+    e = _sel(on01, e0, _sel(on12, e2, (-e1[0], -e1[1], -e1[2], -e1[3], -e1[4], -e1[5])))
+    k = _cross3(p[0], p[1], p[2], p[3], p[4], p[5], e[0], e[1], e[2], e[3], e[4], e[5])
+    nh, nl, dn = _norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
+    mh, ml, dm = _sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
+    eh, el, de = _ratio(nh, nl, dn, mh, ml, dm)
+    t = -(p[0] * e[0] + p[2] * e[2] + p[4] * e[4]) / max(e[0] * e[0] + e[2] * e[2] + e[4] * e[4], 5e-324)
+    t = min(max(t, 0.0), 1.0)
+    near_end = t > 0.5
+    u = t - 1.0 if near_end else t
+    base = 1.0 if near_end else 0.0
+    ex = p[0] + base * e[0] + u * e[0]
+    ey = p[2] + base * e[2] + u * e[2]
+    ez = p[4] + base * e[4] + u * e[4]
+
+    # Face: d = |n . A| / |n| with n = E0 x E1.
+    n = _cross3(e0[0], e0[1], e0[2], e0[3], e0[4], e0[5], e1[0], e1[1], e1[2], e1[3], e1[4], e1[5])
+    th, tl, dt = _dot_bounded(n, (n[6], n[7], n[8]), a)
+    th2, tl2 = dd.sqr(th, tl)
+    dt2 = 2.0 * abs(th) * dt + dt * dt + 8.0 * U * U * abs(th2)
+    gh, gl, dg = _norm2_bounded(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8])
+    fh, fl, df = _ratio(th2, tl2, dt2, gh, gl, dg)
+    fx, fy, fz = cross_accurate(e0[0], e0[2], e0[4], e1[0], e1[2], e1[4])
+    q = dot3_accurate(fx, fy, fz, a[0], a[2], a[4]) / max(fx * fx + fy * fy + fz * fz, 5e-324)
+    wc = max(_edge_fn(fx, fy, fz, a[0], a[2], a[4], e0[0], e0[2], e0[4]), 0.0)
+    wa = max(_edge_fn(fx, fy, fz, b[0], b[2], b[4], e2[0], e2[2], e2[4]), 0.0)
+    wb = max(-_edge_fn(fx, fy, fz, c[0], c[2], c[4], e1[0], e1[2], e1[4]), 0.0)
+    w = max(wa + wb + wc, 5e-324)
+
+    vertex = (feature >= VERTEX0) & (feature <= VERTEX2)
+    face = feature == FACE
+    sh = vh if vertex else (fh if face else eh)
+    sl = vl if vertex else (fl if face else el)
+    delta = dv if vertex else (df if face else de)
+    ok, r, s = _faithful_sqrt(sh, sl, delta)
+    ok = ok & (feature != NONE)
+    px = x[0] if vertex else (q * fx if face else ex)
+    py = x[2] if vertex else (q * fy if face else ey)
+    pz = x[4] if vertex else (q * fz if face else ez)
+    b0 = (
+        (1.0 if feature == VERTEX0 else 0.0)
+        if vertex
+        else (wa / w if face else (1.0 - t if on01 else (0.0 if on12 else t)))
+    )
+    b1 = (
+        (1.0 if feature == VERTEX1 else 0.0)
+        if vertex
+        else (wb / w if face else (t if on01 else (1.0 - t if on12 else 0.0)))
+    )
+    b2 = (
+        (1.0 if feature == VERTEX2 else 0.0)
+        if vertex
+        else (wc / w if face else (0.0 if on01 else (t if on12 else 1.0 - t)))
+    )
+    return ok, r, s, px, py, pz, feature, b0, b1, b2
+
+
+@njit(inline="always", error_model="numpy")
+def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """Exact differences for :func:`triangle_local`, the largest ``|V - P|``,
+    and whether all of them are in the safe window (and finite)."""
+    a = _dd_vec(px, py, pz, v0x, v0y, v0z)
+    b = _dd_vec(px, py, pz, v1x, v1y, v1z)
+    c = _dd_vec(px, py, pz, v2x, v2y, v2z)
+    e0 = _dd_vec(v0x, v0y, v0z, v1x, v1y, v1z)
+    e1 = _dd_vec(v0x, v0y, v0z, v2x, v2y, v2z)
+    e2 = _dd_vec(v1x, v1y, v1z, v2x, v2y, v2z)
+    m = max(
+        max(max(abs(a[0]), abs(a[2])), max(abs(a[4]), abs(b[0]))),
+        max(max(abs(b[2]), abs(b[4])), max(max(abs(c[0]), abs(c[2])), abs(c[4]))),
+    )
+    edges = abs(e0[0]) + abs(e0[2]) + abs(e0[4]) + abs(e1[0]) + abs(e1[2]) + abs(e1[4])
+    edges += abs(e2[0]) + abs(e2[2]) + abs(e2[4])
+    in_window = (m >= SAFE_MIN) & (m <= SAFE_MAX) & (edges < np.inf)
+    return a, b, c, e0, e1, e2, m, in_window
+
+
+@njit(inline="always", error_model="numpy")
+def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """Unscale by ``g``, make the point absolute (vertices exactly), and
+    refuse a distance that became subnormal or infinite."""
+    ok, d, s, x, y, z, feature, b0, b1, b2 = r
+    d = d * g
+    x, y, z = px + x * g, py + y * g, pz + z * g
+    x = v0x if feature == VERTEX0 else (v1x if feature == VERTEX1 else (v2x if feature == VERTEX2 else x))
+    y = v0y if feature == VERTEX0 else (v1y if feature == VERTEX1 else (v2y if feature == VERTEX2 else y))
+    z = v0z if feature == VERTEX0 else (v1z if feature == VERTEX1 else (v2z if feature == VERTEX2 else z))
+    ok = ok & ((d >= 2.2250738585072014e-308) | (d == 0.0)) & (d < np.inf)
+    return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
+
+
+BLOCK = 128  # the length of the blocks point_triangle gathers
+
+
+@njit(cache=True, error_model="numpy")
+def triangle_block(a, r):
+    """Certified queries of a block gathered in structure-of-arrays form.
+
+    ``a`` holds the nine vertex coordinates and the point in its rows, one
+    query per column; ``r[:9]`` receives the results and ``r[9]`` whether
+    the query was certified here (the others take the scalar path: outside
+    the safe window, or undecided).  As ``point_triangle._robust_block``,
+    the loop runs over local scratch of constant length so that it
+    vectorises.
+    """
+    z = np.empty((22, BLOCK))
+    z[:12] = a
+    for q in range(BLOCK):
+        v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
+        v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
+        ea, eb, ec, e0, e1, e2, _, ok = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+        res = finish(
+            triangle_local(ea, eb, ec, e0, e1, e2),
+            1.0,
+            v0x,
+            v0y,
+            v0z,
+            v1x,
+            v1y,
+            v1z,
+            v2x,
+            v2y,
+            v2z,
+            px,
+            py,
+            pz,
+        )
+        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q] = res[1], res[2], res[3], res[4], res[5]
+        z[17, q], z[18, q], z[19, q], z[20, q] = res[6], res[7], res[8], res[9]
+        z[21, q] = ok & (res[0] == CERTAIN)
+    r[:] = z[12:]
+
+
+@njit(cache=True, error_model="numpy")
+def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """Certified point-triangle query for any finite input, or a request for
+    the exact fallback.
+
+    Returns ``(status, distance, sqr_distance, x, y, z, feature, b0, b1, b2)``
+    with ``status`` :data:`CERTAIN` or :data:`EXACT` (the other values are then
+    meaningless).
+    """
+    nan = math.nan
+    fail = (EXACT, nan, nan, nan, nan, nan, NONE, nan, nan, nan)
+    a, b, c, e0, e1, e2, m, _ = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+    edges = abs(e0[0]) + abs(e0[2]) + abs(e0[4]) + abs(e1[0]) + abs(e1[2]) + abs(e1[4])
+    if not (m < np.inf and edges + abs(e2[0]) + abs(e2[2]) + abs(e2[4]) < np.inf):
+        return fail  # a difference of two finite coordinates overflowed
+    if m == 0.0:
+        return CERTAIN, 0.0, 0.0, v0x, v0y, v0z, VERTEX0, 1.0, 0.0, 0.0
+    g = 1.0
+    if m < SAFE_MIN or m > SAFE_MAX:
+        f1, f2 = pow2_scale(m)
+        a, o1 = _scale_vec(a, f1, f2)
+        b, o2 = _scale_vec(b, f1, f2)
+        c, o3 = _scale_vec(c, f1, f2)
+        e0, o4 = _scale_vec(e0, f1, f2)
+        e1, o5 = _scale_vec(e1, f1, f2)
+        e2, o6 = _scale_vec(e2, f1, f2)
+        if not (o1 & o2 & o3 & o4 & o5 & o6):
+            return fail
+        g = (1.0 / f1) * (1.0 / f2)
+        if not g < np.inf:
+            return fail
+    r = finish(
+        triangle_local(a, b, c, e0, e1, e2), g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz
+    )
+    return r if r[0] == CERTAIN else fail
+
+
+@njit(inline="always", error_model="numpy")
+def _edge_fn(nx, ny, nz, vx, vy, vz, ex, ey, ez):
+    return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)
+
+
+@njit(cache=True, error_model="numpy")
+def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """Certified point-circle or point-disk query, or a request for the fallback.
+
+    ``u`` is the unit normal (for the closest point) and ``n`` the normal as
+    given (for the exact terms).  Returns ``(status, distance, sqr_distance,
+    x, y, z, feature, equidistant, height, radial)``.
+    """
+    nan = math.nan
+    fail = (EXACT, nan, nan, nan, nan, nan, NONE, False, nan, nan)
+    dxh, dxl = dd.diff(px, cx)
+    dyh, dyl = dd.diff(py, cy)
+    dzh, dzl = dd.diff(pz, cz)
+    r = radius
+    m = max(max(abs(dxh), abs(dyh)), max(abs(dzh), r))
+    if not m < np.inf:
+        return fail
+    g1 = 1.0
+    g2 = 1.0
+    if m == 0.0:
+        return CERTAIN, 0.0, 0.0, cx, cy, cz, FACE if is_disk else RIM, not is_disk, 0.0, 0.0
+    if m < SAFE_MIN or m > SAFE_MAX:
+        f1, f2 = pow2_scale(m)
+        ok = True
+        dxh, o = _scale_exact(dxh, f1, f2)
+        ok &= o
+        dxl, o = _scale_exact(dxl, f1, f2)
+        ok &= o
+        dyh, o = _scale_exact(dyh, f1, f2)
+        ok &= o
+        dyl, o = _scale_exact(dyl, f1, f2)
+        ok &= o
+        dzh, o = _scale_exact(dzh, f1, f2)
+        ok &= o
+        dzl, o = _scale_exact(dzl, f1, f2)
+        ok &= o
+        r, o = _scale_exact(r, f1, f2)
+        ok &= o
+        if not ok:
+            return fail
+        g1 = 1.0 / f1
+        g2 = 1.0 / f2
+    # The normal as given, scaled by a power of two (only its direction counts).
+    k1, k2 = pow2_scale(max(max(abs(nx), abs(ny)), abs(nz)))
+    nx, o1 = _scale_exact(nx, k1, k2)
+    ny, o2 = _scale_exact(ny, k1, k2)
+    nz, o3 = _scale_exact(nz, k1, k2)
+    if not (o1 and o2 and o3):
+        return fail
+
+    # |n|^2 h^2 = (n . D)^2 and |n|^2 q^2 = |n x D|^2, in double-double.
+    t1h, t1l = dd.mul(nx, 0.0, dxh, dxl)
+    t2h, t2l = dd.mul(ny, 0.0, dyh, dyl)
+    t3h, t3l = dd.mul(nz, 0.0, dzh, dzl)
+    hh, hl = dd.add(t1h, t1l, t2h, t2l)
+    hh, hl = dd.add(hh, hl, t3h, t3l)
+    dh = 16.0 * U * U * (abs(t1h) + abs(t2h) + abs(t3h))
+    vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez = _cross3(
+        nx, 0.0, ny, 0.0, nz, 0.0, dxh, dxl, dyh, dyl, dzh, dzl
+    )
+    xh, xl, dx2 = _norm2_bounded(vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez)
+    mh, ml, dm = _sum_sq(nx, 0.0, ny, 0.0, nz, 0.0)
+
+    # On the axis only when n x D is exactly zero; within rounding of zero
+    # (or underflowed), only exact arithmetic decides.
+    on_axis = vxh == 0.0 and vyh == 0.0 and vzh == 0.0 and ex == 0.0 and ey == 0.0 and ez == 0.0
+    if not on_axis and xh <= dx2 * (1.0 + 1e-12) + SLACK:
+        return fail
+    # q^2 <= R^2 decides a disk's feature: compare |n x D|^2 with R^2 |n|^2.
+    r2h, r2l = dd.sqr(r, 0.0)
+    rrh, rrl = dd.mul(r2h, r2l, mh, ml)
+    face = False
+    if is_disk:
+        gh, _ = dd.sub(rrh, rrl, xh, xl)
+        bound = dx2 + 32.0 * U * U * abs(rrh)
+        if abs(gh) <= bound * (1.0 + 1e-12) + SLACK:
+            return fail
+        face = gh > 0.0
+    h2h, h2l = dd.sqr(hh, hl)
+    if h2h == 0.0 and hh != 0.0:
+        return fail  # the height's square underflowed
+    dh2 = 2.0 * abs(hh) * dh + dh * dh + 8.0 * U * U * abs(h2h)
+    if h2h != 0.0:
+        s1h, s1l, d1 = _ratio(h2h, h2l, dh2, mh, ml, dm)
+    else:
+        s1h, s1l, d1 = 0.0, 0.0, 2.0 * dh2 / mh
+    if face:
+        sh, sl, delta = s1h, s1l, d1
+    else:
+        q2h, q2l, dq2 = _ratio(xh, xl, dx2, mh, ml, dm) if xh != 0.0 else (0.0, 0.0, 0.0)
+        qh, ql = dd.sqrt(q2h, q2l)
+        dq = (0.5 * dq2 / q2h + 8.0 * U * U) * qh if q2h != 0.0 else 0.0
+        wh, wl = dd.sub(qh, ql, r, 0.0)
+        dw = dq + 4.0 * U * U * abs(wh)
+        w2h, w2l = dd.sqr(wh, wl)
+        dw2 = 2.0 * abs(wh) * dw + dw * dw + 8.0 * U * U * abs(w2h)
+        sh, sl = dd.add(s1h, s1l, w2h, w2l)
+        delta = d1 + dw2 + 4.0 * U * U * abs(sh)
+    ok, dist, s = _faithful_sqrt(sh, sl, delta)
+    dist = dist * g1 * g2
+    if not ok or (dist < 2.2250738585072014e-308 and dist != 0.0) or not dist < np.inf:
+        return fail
+
+    # The closest point, height and radial distance in float, as the robust method.
+    h, qx, qy, qz, q, _, _, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+    if face:
+        x, y, z, feature = cx + qx * g, cy + qy * g, cz + qz * g, FACE
+    else:
+        wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
+        x, y, z, feature = cx + radius * wx, cy + radius * wy, cz + radius * wz, RIM
+    return CERTAIN, dist, s * g1 * g1 * g2 * g2, x, y, z, feature, on_axis, h * g, q * g
