@@ -124,6 +124,31 @@ def _store(r, q, res):
 
 
 BLOCK = 128  # queries gathered into structure-of-arrays form at a time
+
+
+@njit(cache=True, error_model="numpy")
+def _robust_block(a, r, is_disk):
+    """Robust queries of a gathered block: rows of ``a`` are the center, the
+    unit normal, the point and the radius, one query per column; ``r[:9]``
+    receives the results and ``r[9]`` whether the query was in the safe
+    window (the others are redone on the scalar path).  The loop runs over
+    local scratch of constant length, so that it vectorises.
+    """
+    z = np.empty((20, BLOCK))
+    z[:10] = a
+    for q in range(BLOCK):
+        cx, cy, cz, ux, uy, uz = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
+        dx, dy, dz, radius = z[6, q] - cx, z[7, q] - cy, z[8, q] - cz, z[9, q]
+        _, ok = window(dx, dy, dz, radius)
+        h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+        res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+        d, s, x, y, z_ = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+        if not is_disk:
+            res = (d, s, x, y, z_, RIM, on_axis, h, qq)
+        z[10, q], z[11, q], z[12, q], z[13, q], z[14, q] = res[0], res[1], res[2], res[3], res[4]
+        z[15, q], z[16, q], z[17, q], z[18, q] = res[5], res[6], res[7], res[8]
+        z[19, q] = ok
+    r[:] = z[10:]
 _SIGNATURE = types.void(
     types.int64,
     types.boolean,
@@ -163,7 +188,7 @@ def _batch(
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        a = np.empty((13, BLOCK))
+        a = np.zeros((10, BLOCK))  # zeros: the tail of the last block is computed too
         r = np.empty((10, BLOCK))
         i = k0 // n_j
         j = k0 - i * n_j
@@ -178,19 +203,7 @@ def _batch(
                 i += 1
                 j = 0
         if method == ROBUST:
-            for q in range(nb):
-                cx, cy, cz, ux, uy, uz = a[0, q], a[1, q], a[2, q], a[3, q], a[4, q], a[5, q]
-                dx, dy, dz, radius = a[6, q] - cx, a[7, q] - cy, a[8, q] - cz, a[9, q]
-                _, ok = window(dx, dy, dz, radius)
-                h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-                res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-                if not is_disk:
-                    d, s, x, y, z = rim(
-                        cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0
-                    )
-                    res = (d, s, x, y, z, RIM, on_axis, h, qq)
-                _store(r, q, res)
-                r[9, q] = ok
+            _robust_block(a, r, is_disk)
         else:
             r[9, :nb] = 0.0
         for q in range(nb):
