@@ -25,8 +25,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 import proximity
-from proximity import Circle, Disk, Feature, Triangle
-from proximity.results import CircleResult, DiskResult, TriangleResult
+from proximity import Circle, Disk, Feature, Triangle, TriangleMesh
+from proximity.results import CircleResult, DiskResult, MeshResult, TriangleResult
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -331,17 +331,20 @@ class Query:
 
     Attributes
     ----------
-    kind : {"triangle", "disk", "circle"}
+    kind : {"triangle", "disk", "circle", "mesh"}
     index : ndarray of int64, shape ``(n,)``
         Which shape (in the flattened batch) each row asks about.
     points : ndarray of float64, shape ``(n, 3)``
         Finite query points only: rows with NaN or inf are never passed.
     vertices : ndarray, shape ``(m, 3, 3)``
-        Triangles (2D ones embedded in ``z = 0``); None for round shapes.
+        Triangles (2D ones embedded in ``z = 0``); for a mesh, its vertices
+        ``(V, 3)``; None for round shapes.
     center, normal, radius : ndarray, shapes ``(m, 3)``, ``(m, 3)``, ``(m,)``
         Round shapes, with unit normals; None for triangles.
     segments : ndarray of int64, shape ``(m,)``
         ``K`` for each shape; 0 where the backend does not tessellate.
+    faces : ndarray of int64, shape ``(F, 3)``
+        A mesh's faces, indexing ``vertices``; None for other shapes.
     """
 
     kind: str
@@ -352,6 +355,7 @@ class Query:
     normal: object
     radius: object
     segments: np.ndarray
+    faces: object = None
 
     def groups(self):
         """``(shape index, row positions in this query)`` for each shape that has rows."""
@@ -369,13 +373,16 @@ class Raw:
 
     ``distance`` and ``point`` are the library's numbers in the caller's
     coordinates (already converted from any rescaled frame); ``failure``
-    holds the library-level codes (OK, NO_RESULT, SENTINEL, EXCEPTION).
+    holds the library-level codes (OK, NO_RESULT, SENTINEL, EXCEPTION);
+    ``face`` the index of the nearest face of a mesh where the library
+    reports it (None where it does not, -1 in rows without an answer).
     """
 
     distance: np.ndarray
     point: np.ndarray
     failure: np.ndarray
     margin: float = float("nan")
+    face: object = None
 
     @classmethod
     def empty(cls, n):
@@ -386,7 +393,7 @@ class Backend:
     """Base of the backends: one library behind proximity's query interface.
 
     Subclasses set the class attributes and implement ``_triangles``,
-    ``_disks`` and ``_circles`` over a :class:`Query`; this class validates,
+    ``_disks``, ``_circles`` and ``_meshes`` over a :class:`Query`; this class validates,
     broadcasts, translates and builds the result.  Backends are context
     managers; :meth:`close` releases whatever the library holds.
     """
@@ -440,8 +447,8 @@ class Backend:
 
         Parameters
         ----------
-        shape : proximity.Triangle, proximity.Disk or proximity.Circle
-            One shape or a batch.
+        shape : proximity.Triangle, proximity.Disk, proximity.Circle or proximity.TriangleMesh
+            One shape or a batch (a mesh is one shape).
         points : array_like, shape ``(..., D)``
             Query points, broadcast against the shape's batch like
             :func:`proximity.closest_point`.
@@ -489,8 +496,9 @@ class Backend:
             center=data.get("center"),
             normal=data.get("normal"),
             radius=data.get("radius"),
+            faces=data.get("faces"),
         )
-        raw = getattr(self, f"_{kind}s")(query)
+        raw = getattr(self, "_meshes" if kind == "mesh" else f"_{kind}s")(query)
 
         distance = np.full(n, np.nan)
         point = np.full((n, 3), np.nan)
@@ -498,6 +506,10 @@ class Backend:
         distance[rows] = raw.distance
         point[rows] = raw.point
         failure[rows] = raw.failure
+        face = None
+        if raw.face is not None:
+            face = np.full(n, -1, dtype=np.int64)
+            face[rows] = raw.face
 
         scale, magnitude = _scales(kind, data, index, all_points)
         tolerance = bound[index] + self.rtol * (scale + magnitude)
@@ -516,6 +528,8 @@ class Backend:
         bad = failure != Failure.OK
         distance[bad] = np.nan
         point[bad] = np.nan
+        if face is not None:
+            face[bad] = -1
         model = Model(
             library=self.library,
             primitive=self.primitives[kind],
@@ -526,7 +540,7 @@ class Backend:
             rtol=self.rtol,
             frame=self.frame,
         )
-        result, unknown = _result(kind, shape.dim, out_shape, distance, point)
+        result, unknown = _result(kind, shape.dim, out_shape, distance, point, face)
         return BackendResult(
             result=result,
             failure=failure.reshape(out_shape),
@@ -543,6 +557,9 @@ class Backend:
         raise NotImplementedError
 
     def _circles(self, query):
+        raise NotImplementedError
+
+    def _meshes(self, query):
         raise NotImplementedError
 
 
@@ -569,14 +586,20 @@ def _flatten_shape(shape):
         radius = np.broadcast_to(shape.radius, batch).reshape(-1).astype(np.float64)
         kind = "disk" if isinstance(shape, Disk) else "circle"
         return kind, {"center": center, "normal": normal, "radius": radius}, shape
-    raise TypeError(f"backends answer for Triangle, Disk and Circle; got {type(shape).__name__}")
+    if isinstance(shape, TriangleMesh):
+        return "mesh", {"vertices": shape.vertices, "faces": shape.faces}, shape
+    raise TypeError(
+        f"backends answer for Triangle, Disk, Circle and TriangleMesh; got {type(shape).__name__}"
+    )
 
 
 def error_scale(shape, points):
     """proximity's error scale ``S`` of each query row, of the broadcast shape.
 
     ``S = max_i |P - V_i|`` for a triangle, ``|P - C| + R`` for a disk or
-    circle: proximity's ``robust`` method is accurate to ``8 eps S``.
+    circle: proximity's ``robust`` method is accurate to ``8 eps S``.  For a
+    mesh, ``|P - C| + R`` for the sphere ``(C, R)`` around the vertices'
+    bounding box, which bounds ``S`` of every face.
     """
     points = np.asarray(points, dtype=np.float64)
     out_shape = np.broadcast_shapes(points.shape[:-1], shape.batch_shape)
@@ -594,6 +617,12 @@ def _scales(kind, data, index, points):
         v = data["vertices"][index]
         scale = np.max(norm(v - points[:, None, :]), axis=1, initial=0.0)
         magnitude = np.maximum(magnitude, np.max(np.abs(v), axis=(1, 2), initial=0.0))
+    elif kind == "mesh":
+        v = data["vertices"]
+        low, high = v.min(axis=0), v.max(axis=0)
+        center = low * 0.5 + high * 0.5
+        scale = norm(points - center) + float(norm(high - center))
+        magnitude = np.maximum(magnitude, float(np.max(np.abs(v))))
     else:
         c = data["center"][index]
         scale = norm(points - c) + data["radius"][index]
@@ -630,7 +659,7 @@ def _translate(distance, point, failure, points, tolerance, reference, check_sha
     failure[inconsistent] = Failure.INCONSISTENT
 
 
-def _result(kind, dim, out_shape, distance, point):
+def _result(kind, dim, out_shape, distance, point, face=None):
     """proximity's result type, with the fields no library gives set to 'unknown'."""
     feature = np.full(out_shape, Feature.NONE, dtype=np.int8)
     with np.errstate(over="ignore", under="ignore"):
@@ -647,6 +676,13 @@ def _result(kind, dim, out_shape, distance, point):
             "feature",
             "barycentric",
         )
+    if kind == "mesh":
+        unknown = ("feature", "barycentric") if face is not None else ("feature", "barycentric", "face")
+        if face is None:
+            face = np.full(out_shape, -1, dtype=np.int64)
+        return MeshResult(
+            **common, barycentric=np.full(out_shape + (3,), np.nan), face=face.reshape(out_shape)
+        ), unknown
     rounds = dict(height=np.full(out_shape, np.nan), radial=np.full(out_shape, np.nan))
     if kind == "disk":
         return DiskResult(**common, **rounds), ("feature", "height", "radial")

@@ -16,13 +16,18 @@ Circle
     ``Capsule(0, L)`` (a capsule of radius 0 is exactly a segment), with the
     fewest ``K`` whose sagitta ``R (1 - cos(pi/K))`` meets the tolerance.
     The row's answer is the nearest of the ``K`` capsules.
+TriangleMesh
+    One ``BVHModel`` of all the faces, built once per call, in the caller's
+    coordinates; fcl's own hierarchy finds the nearest face, whose index it
+    reports (``DistanceResult.b1``) and the result keeps as ``face``.
 
 Known biases, translated
 ------------------------
 * A degenerate triangle (collinear or coincident vertices) is "touching"
   every point: fcl returns distance 0 with uninitialised nearest points.
   Such rows become ``FALSE_TOUCHING`` when proximity finds the triangle
-  farther than the row's tolerance.
+  farther than the row's tolerance.  In a mesh, the same happens whenever
+  fcl's traversal reaches a degenerate face.
 * In contact (distance 0), the nearest points are not computed: whatever is
   in memory is returned (values such as ``(0, 6.9e-310, 0.707)``).  Those
   rows become ``POINT_OFF_SHAPE`` or ``INCONSISTENT``.
@@ -70,6 +75,7 @@ class FclBackend(Backend):
         "triangle": "BVHModel(1 triangle)",
         "disk": "Cylinder(R, 0)",
         "circle": "K x Capsule(0, L)",
+        "mesh": "BVHModel(F triangles)",
     }
     probe = "Sphere(0) at the point"
     tessellated = ("circle",)
@@ -167,3 +173,25 @@ class FclBackend(Backend):
             ]
 
         return self._run(query, build)
+
+    def _meshes(self, query):
+        fcl = self._fcl
+        model = fcl.BVHModel()
+        model.beginModel(len(query.vertices), len(query.faces))
+        model.addSubModel(np.ascontiguousarray(query.vertices), np.ascontiguousarray(query.faces))
+        model.endModel()
+        mesh = fcl.CollisionObject(model, fcl.Transform())
+        probe = self._probe()
+        raw = Raw.empty(len(query.points))
+        face = np.full(len(query.points), -1, dtype=np.int64)
+        for i, p in enumerate(query.points):
+            probe.setTranslation(p)
+            result = fcl.DistanceResult()
+            d = fcl.distance(mesh, probe, self._request, result)
+            if d == CONTACT or not (d < UNSUPPORTED):
+                raw.failure[i] = Failure.SENTINEL
+                continue
+            raw.distance[i] = d
+            raw.point[i] = result.nearest_points[0]
+            face[i] = result.b1
+        return Raw(raw.distance, raw.point, raw.failure, face=face)

@@ -35,6 +35,13 @@ Circle
     compound of more children can miss its nearest one; creating a body
     also costs about 0.3 ms per capsule, where moving one costs a few
     microseconds.
+TriangleMesh
+    ``GEOM_MESH`` with ``GEOM_FORCE_CONCAVE_TRIMESH`` (a static concave
+    mesh, not its convex hull), in the frame of its bounding box's center.
+    ``getClosestPoints`` reports one point per face within the distance
+    threshold, so each query costs time in proportion to the faces that
+    threshold reaches, which here is the whole mesh; it does not report
+    which face is nearest.
 
 Every body's collision margin is set to 0 with ``changeDynamics`` (the
 default is 0.001) and read back into :attr:`Model.margin`.
@@ -119,6 +126,7 @@ class PybulletBackend(Backend):
         "triangle": "GEOM_MESH(1 triangle)",
         "disk": "GEOM_CYLINDER(R, height 0)",
         "circle": "GEOM_CAPSULE(1e-9, L) moved to K segments",
+        "mesh": "GEOM_MESH(GEOM_FORCE_CONCAVE_TRIMESH)",
     }
     probe = f"GEOM_SPHERE(radius {PROBE_RADIUS:g} of the shape's size), added back"
     frame = "per shape: origin at a vertex or the center, scaled by a power of two"
@@ -297,5 +305,26 @@ class PybulletBackend(Backend):
                 )
 
             return create, placements, query.center[k], factor, PROBE_RADIUS
+
+        return self._run(query, describe)
+
+    def _meshes(self, query):
+        def describe(k):
+            v = query.vertices
+            origin = v.min(axis=0) * 0.5 + v.max(axis=0) * 0.5
+            factor = float(pow2_scale(np.max(np.abs(v - origin))))
+            local = ((v - origin) * factor).tolist()
+            indices = query.faces.ravel().tolist()
+
+            def create():
+                return self._call(
+                    "createCollisionShape",
+                    self._p.GEOM_MESH,
+                    vertices=local,
+                    indices=indices,
+                    flags=self._p.GEOM_FORCE_CONCAVE_TRIMESH,
+                )
+
+            return create, [(ORIGIN, IDENTITY)], origin, factor, 0.0
 
         return self._run(query, describe)

@@ -5,7 +5,9 @@ NumPy batches, behind one shape protocol.
 """
 
 from ._counts import stats as certified_stats
-from .results import CircleResult, DiskResult, Feature, Result, TriangleResult
+from .mesh import TriangleMesh
+from .results import CircleResult, DiskResult, Feature, MeshResult, Result, SceneResult, TriangleResult
+from .scene import Scene
 from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle
 
 __all__ = [
@@ -14,9 +16,13 @@ __all__ = [
     "Disk",
     "DiskResult",
     "Feature",
+    "MeshResult",
     "Result",
+    "Scene",
+    "SceneResult",
     "Shape",
     "Triangle",
+    "TriangleMesh",
     "TriangleResult",
     "certified_stats",
     "closest_point",
@@ -29,7 +35,8 @@ __version__ = "0.1.0"
 def _check(shape):
     if not isinstance(shape, Shape):
         raise TypeError(
-            f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}"
+            "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
+            f"got {type(shape).__name__}"
         )
     return shape
 

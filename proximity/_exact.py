@@ -25,7 +25,7 @@ _MAX = Fraction(float.fromhex("0x1.fffffffffffffp+1023"))
 def _float(x):
     """The float nearest a Fraction (correctly rounded), inf beyond the range."""
     if abs(x) > _MAX:
-        return math.copysign(math.inf, x)
+        return math.inf if x > 0 else -math.inf
     return float(x)
 
 
@@ -56,8 +56,9 @@ def faithful_sqrt(lo2, hi2=None):
     r = _float((lo + hi) / 2)
     if math.isinf(r):
         return r if lo > _MAX else None
-    below, above = Fraction(math.nextafter(r, 0.0)), Fraction(math.nextafter(r, math.inf))
-    if below**2 < lo2 and hi2 < above**2:
+    below, above = math.nextafter(r, 0.0), math.nextafter(r, math.inf)
+    # Beyond the largest float every value above it rounds to inf or to it.
+    if Fraction(below) ** 2 < lo2 and (math.isinf(above) or hi2 < Fraction(above) ** 2):
         return r
     return None
 
@@ -190,7 +191,7 @@ def round_shape(is_disk, center, normal, radius, point, robust_point):
     h2 = nd * nd / nn
     q2 = _dot(dvec, dvec) - h2
     face = is_disk and q2 <= r * r
-    height = math.copysign(faithful_sqrt(h2), nd)
+    height = -faithful_sqrt(h2) if nd < 0 else faithful_sqrt(h2)
     radial = faithful_sqrt(q2)
     if face:
         dist, sqr = faithful_sqrt(h2), _float(h2)

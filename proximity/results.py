@@ -178,3 +178,51 @@ class CircleResult(DiskResult):
     """
 
     equidistant: np.ndarray
+
+
+@dataclass(frozen=True)
+class MeshResult(TriangleResult):
+    """Closest point on a triangle mesh.
+
+    Attributes
+    ----------
+    face : ndarray of int64, shape ``batch``
+        Index (into the mesh's ``faces``) of the face holding the closest
+        point; ``barycentric`` and ``feature`` refer to that face.  Among
+        faces at the same computed distance, the lowest index.  -1 where
+        the row has no answer.
+    """
+
+    face: np.ndarray
+
+
+@dataclass(frozen=True)
+class SceneResult(Result):
+    """Closest point on a scene of triangles, disks and circles.
+
+    Attributes
+    ----------
+    primitive : ndarray of int64, shape ``batch``
+        Index of the nearest primitive in the scene's flattened list (see
+        :class:`proximity.Scene`); among primitives at the same computed
+        distance, the lowest index.  -1 where the row has no answer.
+    source : ndarray of int64, shape ``batch``
+        Index, in the list the scene was built from, of the shape that
+        primitive came from; -1 where the row has no answer.
+    barycentric : ndarray of float64, shape ``batch + (3,)``
+        As in :class:`TriangleResult` where the nearest primitive is a
+        triangle; NaN otherwise.
+    height, radial : ndarray of float64, shape ``batch``
+        As in :class:`DiskResult` where the nearest primitive is a disk or
+        a circle; NaN otherwise.
+    equidistant : ndarray of bool, shape ``batch``
+        As in :class:`CircleResult` where the nearest primitive is a
+        circle; False otherwise.
+    """
+
+    primitive: np.ndarray
+    source: np.ndarray
+    barycentric: np.ndarray
+    height: np.ndarray
+    radial: np.ndarray
+    equidistant: np.ndarray

@@ -147,3 +147,15 @@ def test_the_fallback_is_counted():
     tri.closest_point([0.5, 0.5, 0.0], method="certified")
     assert proximity.certified_stats(reset=True) == {"queries": 3, "exact": 2}
     assert proximity.certified_stats() == {"queries": 0, "exact": 0}
+
+
+def test_distances_beyond_the_float_range_do_not_raise():
+    """Coordinates near the float limit: the exact fallback rounds to inf, never raises."""
+    huge = 1.7e308
+    tri = Triangle([[1e300, 1e300, 1e300], [-1e300, -1e300, 1e300], [1e300, -1e300, -1e300]])
+    d = tri.distance([[-huge, huge, -huge], [huge, huge, huge], [0.0, 0.0, 0.0]], method="certified")
+    assert np.isinf(d[:2]).all() and np.isfinite(d[2])
+    for cls in (Disk, Circle):
+        shape = cls([1e300, 1e300, 1e300], [1.0, 1.0, 1.0], 1e300)
+        r = shape.closest_point([[-huge, -huge, -huge], [1e308, -1e308, 0.0]], method="certified")
+        assert np.isinf(r.distance[0]) and np.isfinite(r.distance[1])

@@ -1,0 +1,667 @@
+"""Meshes: proximity against trimesh and fcl, BVH build time and memory, in one run.
+
+    python -m benchmarks.meshes [--quick] [--out DIR] [--seed 0] [--readme README.md]
+    python -m benchmarks.meshes --crossover      # brute force against the BVH, n = 4..256
+
+The default run (about a minute) builds a torus of 20,000 triangles and two
+seeded sets of 100,000 points: *near* (on the surface, moved along the
+face normal by a normal deviate of 1% of the torus' size) and *box*
+(uniform in the mesh's bounding box).  It measures:
+
+* proximity (``TriangleMesh``, BVH, ``robust``): ``closest_point`` on all
+  100,000 points, median of 5 calls after a warm-up call;
+* ``trimesh.proximity.closest_point``, once, on the first 5,000 points of
+  each set (it is slow), as points per second;
+* fcl: a ``BVHModel`` of the mesh built once and a ``Sphere(0)`` moved to
+  each point, ``fcl.distance`` in a Python loop over the first 2,000 points,
+  as points per second;
+* the ratios of throughputs, against the issue's targets (50x trimesh,
+  10x fcl);
+* the time to build the BVH of 1,000,000 triangles (a torus), as the
+  ``TriangleMesh`` constructor;
+* peak memory (``VmHWM`` after resetting it through ``/proc/self/clear_refs``,
+  in a fresh subprocess) of the 100,000-point query, of the 1M-triangle
+  build, and of trimesh's query on 5,000 points;
+* accuracy of every method and of the backends on the first 200 points
+  of each set, against the exact reference (rational arithmetic on every
+  face that can be nearest), in the units of :mod:`benchmarks.suite`.
+
+``OUT/meshes.json`` holds the raw data: ``meta``, ``speed`` (per entity and
+point set: ``n``, ``seconds``, ``qps``), ``ratios``, ``build``, ``memory``,
+and ``families``: records in the format of :mod:`benchmarks.suite` (kind
+``"mesh"``) with ``d_exact``, ``scale`` and per-entity ``error_eps_s``,
+``error_ulps`` and ``timing``, for the accuracy-against-speed chart.
+
+``--crossover`` times brute force against the BVH on 10,000 points
+uniform in the bounding box of ``n`` triangles scattered in a unit cube,
+for ``n`` from 4 to 256 (one thread, least of 15 calls), and prints the
+largest ``n`` at which brute force is still faster: the basis of
+``proximity.scene.BRUTE_FORCE_MAX``.
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import proximity
+from benchmarks import accuracy
+from tests import exact
+
+EPS = 2.0**-52
+TARGETS = {"trimesh": 50.0, "fcl": 10.0}
+
+
+# -- meshes and points ---------------------------------------------------------------
+
+
+def torus(n_major, n_minor, major=1.0, minor=0.35):
+    """A closed torus of ``2 n_major n_minor`` triangles around the z axis.
+
+    Returns ``(vertices (V, 3), faces (F, 3))``, faces oriented outwards.
+    """
+    u = 2.0 * np.pi * np.arange(n_major) / n_major
+    v = 2.0 * np.pi * np.arange(n_minor) / n_minor
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    ring = major + minor * np.cos(vv)
+    vertices = np.stack([ring * np.cos(uu), ring * np.sin(uu), minor * np.sin(vv)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
+    a = i * n_minor + j
+    b = ((i + 1) % n_major) * n_minor + j
+    c = ((i + 1) % n_major) * n_minor + (j + 1) % n_minor
+    d = i * n_minor + (j + 1) % n_minor
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return vertices, faces
+
+
+def icosphere(subdivisions, radius=1.0):
+    """A sphere of ``20 * 4**subdivisions`` triangles, each edge split in two per level."""
+    t = (1.0 + 5.0**0.5) / 2.0
+    vertices = [
+        [-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
+        [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+        [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1],
+    ]  # fmt: skip
+    faces = [
+        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+    ]  # fmt: skip
+    vertices = [np.array(v, dtype=np.float64) for v in vertices]
+
+    def split(a, b, middle):
+        key = (min(a, b), max(a, b))
+        if key not in middle:
+            middle[key] = len(vertices)
+            vertices.append((vertices[a] + vertices[b]) / 2.0)
+        return middle[key]
+
+    for _ in range(subdivisions):
+        middle = {}
+        refined = []
+        for a, b, c in faces:
+            ab, bc, ca = split(a, b, middle), split(b, c, middle), split(c, a, middle)
+            refined += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        faces = refined
+    v = np.array(vertices)
+    v *= radius / np.linalg.norm(v, axis=1, keepdims=True)
+    return v, np.array(faces, dtype=np.int64)
+
+
+def soup(rng, n, size=0.2, degenerate=0.0):
+    """``n`` independent triangles of about ``size`` in the unit cube, a fraction of them degenerate.
+
+    Coordinates are multiples of ``2^-12``, so the degenerate ones are
+    exactly so: collinear (``V2 = V0 + 2 (V1 - V0)``), two coincident
+    vertices, or all three coincident, in turn.  Returns ``(vertices (3n, 3),
+    faces (n, 3))``.
+    """
+    grid = 2.0**-12
+    v0 = np.round(rng.uniform(0.0, 1.0, (n, 3)) / grid) * grid
+    v1 = v0 + np.round(rng.normal(0.0, size, (n, 3)) / grid) * grid
+    v2 = v0 + np.round(rng.normal(0.0, size, (n, 3)) / grid) * grid
+    bad = np.flatnonzero(rng.uniform(size=n) < degenerate)
+    kind = np.arange(len(bad)) % 3
+    v2[bad[kind == 0]] = v0[bad[kind == 0]] + 2.0 * (v1[bad[kind == 0]] - v0[bad[kind == 0]])
+    v1[bad[kind == 1]] = v0[bad[kind == 1]]
+    v1[bad[kind == 2]] = v0[bad[kind == 2]]
+    v2[bad[kind == 2]] = v0[bad[kind == 2]]
+    vertices = np.stack([v0, v1, v2], axis=1).reshape(-1, 3)
+    return vertices, np.arange(3 * n).reshape(n, 3)
+
+
+def near_points(rng, vertices, faces, n, offset):
+    """``n`` points on the surface (area-weighted), moved along the face normal by ``N(0, offset)``."""
+    tri = vertices[faces]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = np.linalg.norm(normal, axis=1)
+    face = rng.choice(len(faces), size=n, p=area / area.sum())
+    r1, r2 = rng.uniform(size=(2, n))
+    s = np.sqrt(r1)
+    weights = np.stack([1.0 - s, s * (1.0 - r2), s * r2], axis=1)
+    on = np.einsum("ni,nij->nj", weights, tri[face])
+    unit = normal[face] / area[face, None]
+    return on + unit * rng.normal(0.0, offset, (n, 1))
+
+
+def box_points(rng, vertices, n):
+    """``n`` points uniform in the bounding box of the vertices."""
+    return rng.uniform(vertices.min(axis=0), vertices.max(axis=0), size=(n, 3))
+
+
+# -- the exact reference --------------------------------------------------------------
+
+
+def reference(vertices, faces, points):
+    """``[(d_exact, S)]`` per point: the exact distance to the mesh and the nearest face's scale.
+
+    ``robust`` is within ``8 eps S`` of each face's exact distance, and a
+    face's ``S`` is at most its distance plus its longest edge ``L``, so only
+    faces whose ``robust`` distance is within ``16 eps (d_min + L_max)`` of
+    the least can hold the exact minimum; those are evaluated exactly (with
+    a factor 2 to spare).
+    """
+    tri = vertices[faces]
+    longest = float(np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=-1)))
+    out = []
+    for p in points:
+        d = proximity.Triangle(tri).distance(p)
+        least = float(np.min(d))
+        candidates = np.flatnonzero(d <= least + 32.0 * EPS * (least + longest))
+        face = min(candidates, key=lambda f: exact.triangle_sqr_distance(tri[f], p))
+        out.append((exact.triangle_distance(tri[face], p), exact.triangle_scale(tri[face], p)))
+    return out
+
+
+# -- timing ------------------------------------------------------------------------------
+
+
+def _timed(call, n, repeats):
+    seconds = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call()
+        seconds.append(time.perf_counter() - start)
+    return {"n": int(n), "repeats": int(repeats), "seconds": seconds, "qps": n / float(np.median(seconds))}
+
+
+def time_proximity(mesh, points, method="robust", repeats=5):
+    """Median of ``repeats`` calls of ``closest_point`` on all the points, after a warm-up call."""
+    mesh.closest_point(points, method=method)
+    return _timed(lambda: mesh.closest_point(points, method=method), len(points), repeats)
+
+
+def time_trimesh(vertices, faces, points):
+    """``trimesh.proximity.closest_point`` once on the points (the mesh's r-tree built beforehand)."""
+    import trimesh
+
+    tm = trimesh.Trimesh(vertices, faces, process=False)
+    trimesh.proximity.closest_point(tm, points[:10])  # builds and caches the r-tree
+    return _timed(lambda: trimesh.proximity.closest_point(tm, points), len(points), 1)
+
+
+def time_fcl(vertices, faces, points):
+    """:func:`fcl_distances` once on the points, model construction excluded."""
+    import fcl
+
+    model = fcl.BVHModel()
+    model.beginModel(len(vertices), len(faces))
+    model.addSubModel(np.ascontiguousarray(vertices), np.ascontiguousarray(faces))
+    model.endModel()
+    mesh = fcl.CollisionObject(model, fcl.Transform())
+    probe = fcl.CollisionObject(fcl.Sphere(0.0), fcl.Transform())
+    request = fcl.DistanceRequest(enable_nearest_points=True)
+
+    def run():
+        for p in points:
+            probe.setTranslation(p)
+            fcl.distance(mesh, probe, request, fcl.DistanceResult())
+
+    return _timed(run, len(points), 1)
+
+
+class _threads:
+    """Numba's thread count set to ``n`` inside the block."""
+
+    def __init__(self, n):
+        self.n = n
+
+    def __enter__(self):
+        import numba
+
+        self.before = numba.get_num_threads()
+        numba.set_num_threads(self.n)
+
+    def __exit__(self, *exc):
+        import numba
+
+        numba.set_num_threads(self.before)
+
+
+def _installed(module):
+    try:
+        __import__(module)
+    except ImportError:
+        return False
+    return True
+
+
+# -- memory ------------------------------------------------------------------------------
+
+
+def _peak_kib():
+    text = Path("/proc/self/status").read_text()
+    return int(re.search(r"VmHWM:\s+(\d+)", text).group(1))
+
+
+def _rss_kib():
+    text = Path("/proc/self/status").read_text()
+    return int(re.search(r"VmRSS:\s+(\d+)", text).group(1))
+
+
+def _reset_peak():
+    Path("/proc/self/clear_refs").write_text("5")
+
+
+def _memory_child(what, n_points, n_major, n_minor, seed):
+    """In a fresh process: ``{"before_mib", "peak_mib", "added_mib"}`` around one operation."""
+    rng = np.random.default_rng(seed)
+    vertices, faces = torus(n_major, n_minor)
+    points = box_points(rng, vertices, n_points)
+    if what == "query":
+        mesh = proximity.TriangleMesh(vertices, faces)
+        mesh.closest_point(points[:100])  # loads the kernels
+
+        def run():
+            return mesh.closest_point(points)
+    elif what == "build":
+        proximity.TriangleMesh(*torus(8, 8))  # loads the kernels
+
+        def run():
+            return proximity.TriangleMesh(vertices, faces)
+    elif what == "trimesh":
+        import trimesh
+
+        tm = trimesh.Trimesh(vertices, faces, process=False)
+        trimesh.proximity.closest_point(tm, points[:10])
+
+        def run():
+            return trimesh.proximity.closest_point(tm, points)
+    else:
+        raise ValueError(what)
+    _reset_peak()
+    before = _rss_kib()
+    result = run()
+    peak = _peak_kib()
+    del result
+    return {"before_mib": before / 1024, "peak_mib": peak / 1024, "added_mib": (peak - before) / 1024}
+
+
+def measure_memory(what, n_points, n_major, n_minor, seed):
+    """:func:`_memory_child` in a subprocess; None where ``/proc`` cannot reset the peak."""
+    if not Path("/proc/self/clear_refs").exists():
+        return None
+    args = [sys.executable, "-m", "benchmarks.meshes", "--memory-child", what, str(n_points)]
+    args += [str(n_major), str(n_minor), str(seed)]
+    root = Path(__file__).resolve().parent.parent
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]))
+    done = subprocess.run(args, capture_output=True, text=True, cwd=root, env=env, check=False)
+    if done.returncode != 0:
+        return {"error": done.stderr.strip().splitlines()[-1] if done.stderr.strip() else "failed"}
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+# -- accuracy records for the charts --------------------------------------------------
+
+
+def accuracy_record(label, vertices, faces, points, speed):
+    """A family record in the format of :mod:`benchmarks.suite`, kind ``"mesh"``."""
+    import adapters
+
+    ref = reference(vertices, faces, points)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    results = {}
+    for method in mesh.methods:
+        d = np.asarray(mesh.closest_point(points, method=method).distance)
+        results[method] = _errors(d, ref, {"NAN": np.flatnonzero(np.isnan(d))})
+        results[method]["timing"] = speed.get(method)
+    for name in ("trimesh", "fcl"):
+        if name not in adapters.available() or (name == "trimesh" and not _installed("rtree")):
+            continue
+        with adapters.get(name) as backend:
+            r = backend.closest_point(mesh, points)
+        failure = np.asarray(r.failure)
+        failed = {
+            adapters.Failure(code).name: np.flatnonzero(failure == code)
+            for code in np.unique(failure)
+            if code != adapters.Failure.OK
+        }
+        results[name] = _errors(np.asarray(r.distance), ref, failed)
+        results[name]["timing"] = speed.get(name)
+    return {
+        "kind": "mesh",
+        "family": label,
+        "name": label,
+        "params": {"faces": len(faces)},
+        "n": len(points),
+        "d_exact": [float(d) for d, _ in ref],
+        "scale": [float(s) for _, s in ref],
+        "results": results,
+    }
+
+
+def _errors(distance, ref, failed):
+    distance = np.array(distance, dtype=np.float64)
+    bad = np.zeros(len(distance), dtype=bool)
+    for rows in failed.values():
+        bad[rows] = True
+    distance[bad] = np.nan
+    in_s = np.where(bad, np.nan, accuracy.errors(distance, ref))
+    in_ulps = np.where(bad, np.nan, accuracy.ulp_errors(distance, ref))
+
+    def finite(values):
+        return [float(v) if np.isfinite(v) else None for v in values]
+
+    return {
+        "answered": int((~bad).sum()),
+        "failed": {reason: [int(i) for i in rows] for reason, rows in failed.items() if len(rows)},
+        "error_eps_s": finite(in_s),
+        "error_ulps": finite(in_ulps),
+    }
+
+
+# -- the runs ------------------------------------------------------------------------------
+
+
+def run(quick=False, seed=0, log=print):
+    """Every measurement of the module docstring; returns the JSON-ready record."""
+    sizes = (
+        dict(major=100, minor=100, n=20_000, trimesh=1_000, fcl=500, build=(500, 200), accuracy=30, repeats=3)
+        if quick
+        else dict(
+            major=100,
+            minor=100,
+            n=100_000,
+            trimesh=5_000,
+            fcl=2_000,
+            build=(1000, 500),
+            accuracy=200,
+            repeats=5,
+        )
+    )
+    rng = np.random.default_rng(seed)
+    vertices, faces = torus(sizes["major"], sizes["minor"])
+    size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
+    sets = {
+        "near": near_points(rng, vertices, faces, sizes["n"], 0.01 * size),
+        "box": box_points(rng, vertices, sizes["n"]),
+    }
+    log(f"torus: {len(faces)} triangles; {sizes['n']} points near the surface and {sizes['n']} in its box")
+    start = time.perf_counter()
+    mesh = proximity.TriangleMesh(vertices, faces)
+    build_20k = time.perf_counter() - start  # includes loading the compiled kernels
+    start = time.perf_counter()
+    mesh = proximity.TriangleMesh(vertices, faces)
+    build_20k = min(build_20k, time.perf_counter() - start)
+
+    speed = {}
+    for label, points in sets.items():
+        for method in mesh.methods:
+            part = points if method == "robust" else points[: sizes["n"] // 5]
+            timing = time_proximity(mesh, part, method, sizes["repeats"] if method == "robust" else 3)
+            speed.setdefault(method, {})[label] = timing
+        log(f"  proximity robust, {label}: {speed['robust'][label]['qps']:.3g} points/s")
+        with _threads(1):
+            speed.setdefault("robust[1 thread]", {})[label] = time_proximity(mesh, points, "robust", 3)
+        if _installed("trimesh") and _installed("rtree") and _installed("scipy"):
+            speed.setdefault("trimesh", {})[label] = time_trimesh(vertices, faces, points[: sizes["trimesh"]])
+            log(f"  trimesh.proximity.closest_point, {label}: {speed['trimesh'][label]['qps']:.3g} points/s")
+        if _installed("fcl"):
+            speed.setdefault("fcl", {})[label] = time_fcl(vertices, faces, points[: sizes["fcl"]])
+            log(f"  fcl per-point BVH distance, {label}: {speed['fcl'][label]['qps']:.3g} points/s")
+
+    ratios = {}
+    for ours in ("robust", "robust[1 thread]"):
+        for other in ("trimesh", "fcl"):
+            for label in sets:
+                if other in speed:
+                    ratio = speed[ours][label]["qps"] / speed[other][label]["qps"]
+                    key = f"{other}/{label}" + (" (1 thread)" if ours != "robust" else "")
+                    ratios[key] = {"ratio": ratio, "target": TARGETS[other]}
+
+    n_major, n_minor = sizes["build"]
+    big_v, big_f = torus(n_major, n_minor)
+    start = time.perf_counter()
+    big = proximity.TriangleMesh(big_v, big_f)
+    build_big = time.perf_counter() - start
+    build = {
+        "faces_20k": {"faces": len(faces), "seconds": build_20k},
+        "large": {
+            "faces": len(big_f),
+            "seconds": build_big,
+            "nodes": big._tree.nodes,
+            "depth": big._tree.depth,
+        },
+    }
+    del big, big_v, big_f
+
+    memory = {
+        "query": measure_memory("query", sizes["n"], sizes["major"], sizes["minor"], seed),
+        "build": measure_memory("build", 0, n_major, n_minor, seed),
+    }
+    if "trimesh" in speed:
+        memory["trimesh_query"] = measure_memory(
+            "trimesh", sizes["trimesh"], sizes["major"], sizes["minor"], seed
+        )
+
+    families = []
+    for label, points in sets.items():
+        part = points[: sizes["accuracy"]]
+        entity_speed = {name: by_set[label] for name, by_set in speed.items()}
+        families.append(accuracy_record(f"torus_{label}", vertices, faces, part, entity_speed))
+
+    return {
+        "meta": {
+            "command": "python -m benchmarks.meshes" + (" --quick" if quick else ""),
+            "seed": seed,
+            "sizes": sizes,
+            "cpus": os.cpu_count(),
+            "load_average": os.getloadavg(),
+            "numba_threads": __import__("numba").get_num_threads(),
+        },
+        "speed": speed,
+        "ratios": ratios,
+        "build": build,
+        "memory": memory,
+        "families": families,
+    }
+
+
+def report(raw):
+    """The run as text: throughput, ratios against their targets, build, memory, worst errors."""
+    lines = ["points/s (proximity: all points, median of the repeats; others: one call on a subset)"]
+    for name, by_set in raw["speed"].items():
+        cells = ", ".join(f"{label} {t['qps']:.3g} (n={t['n']})" for label, t in by_set.items())
+        lines.append(f"  {name:16s} {cells}")
+    lines.append(
+        "ratios (proximity robust / other; '1 thread': proximity on one thread, the others use one):"
+    )
+    for key, value in raw["ratios"].items():
+        mark = "ok" if value["ratio"] >= value["target"] else "BELOW TARGET"
+        lines.append(f"  {key:24s} {value['ratio']:8.1f}x  (target {value['target']:g}x: {mark})")
+    build = raw["build"]
+    lines.append(
+        f"BVH build: {build['faces_20k']['faces']} faces {build['faces_20k']['seconds']:.3f} s; "
+        f"{build['large']['faces']} faces {build['large']['seconds']:.2f} s "
+        f"({build['large']['nodes']} nodes, depth {build['large']['depth']})"
+    )
+    for key, value in raw["memory"].items():
+        if value is None or "error" in value:
+            lines.append(f"memory {key}: not measured ({value})")
+        else:
+            lines.append(f"memory {key}: peak {value['peak_mib']:.1f} MiB, +{value['added_mib']:.1f} MiB")
+    lines.append("worst error over the accuracy points, in eps*S (failed rows excluded):")
+    for family in raw["families"]:
+        cells = []
+        for name, r in family["results"].items():
+            errors = [e for e in r["error_eps_s"] if e is not None]
+            failed = sum(len(rows) for rows in r["failed"].values())
+            cells.append(f"{name} {max(errors):.3g}" + (f" ({failed} failed)" if failed else ""))
+        lines.append(f"  {family['family']}: " + ", ".join(cells))
+    lines.append(f"load average during the run: {raw['meta']['load_average']}")
+    return "\n".join(lines)
+
+
+def markdown(raw):
+    """The README's table of the run: throughput and ratios, build time, memory."""
+    speed, meta = raw["speed"], raw["meta"]
+    sizes = meta["sizes"]
+    load = ", ".join(f"{x:.1f}" for x in meta["load_average"])
+    threads = ""
+    if "robust[1 thread]" in speed:
+        gain = speed["robust"]["near"]["qps"] / speed["robust[1 thread]"]["near"]["qps"]
+        threads = f"; two threads were {gain:.1f} times as fast as one"
+    lines = [
+        f"Torus of {raw['build']['faces_20k']['faces']:,} triangles; {sizes['n']:,} points near the "
+        f"surface (moved off it by 1% of the size) and {sizes['n']:,} uniform in its bounding box. "
+        f"Points per second; proximity (`robust`, BVH) on all points, median of {sizes['repeats']} calls; "
+        f"trimesh once on the first {sizes['trimesh']:,} points, fcl (a `BVHModel` and a `Sphere(0)` "
+        f"moved per point) on the first {sizes['fcl']:,}. Made by `python -m benchmarks.meshes "
+        f"--readme README.md` on {meta['cpus']} cores shared with other jobs (load average {load}"
+        f"{threads}).",
+        "",
+        "| | near the surface | in the bounding box |",
+        "|---|---:|---:|",
+    ]
+    names = {
+        "robust": "proximity, 2 threads",
+        "robust[1 thread]": "proximity, 1 thread",
+        "trimesh": "`trimesh.proximity.closest_point`",
+        "fcl": "fcl, per point",
+    }
+    for key, label in names.items():
+        if key in speed:
+            lines.append(f"| {label} | {speed[key]['near']['qps']:,.0f} | {speed[key]['box']['qps']:,.0f} |")
+    for other, label in (("trimesh", "trimesh"), ("fcl", "fcl")):
+        if f"{other}/near" in raw["ratios"]:
+            near, box = raw["ratios"][f"{other}/near"], raw["ratios"][f"{other}/box"]
+            target = f"target {near['target']:g}x"
+            lines.append(f"| speed-up over {label} ({target}) | {near['ratio']:.0f}x | {box['ratio']:.0f}x |")
+    build, memory = raw["build"], raw["memory"]
+    lines += [
+        "",
+        f"BVH build: {build['large']['faces']:,} triangles in {build['large']['seconds']:.1f} s "
+        f"({build['faces_20k']['faces']:,} in {build['faces_20k']['seconds'] * 1e3:.0f} ms).",
+    ]
+    parts = []
+    for key, label in (
+        ("query", f"the query of {sizes['n']:,} points"),
+        ("build", f"the build of {build['large']['faces']:,} triangles"),
+        ("trimesh_query", f"trimesh's query of {sizes['trimesh']:,} points"),
+    ):
+        value = memory.get(key)
+        if value and "error" not in value:
+            parts.append(f"{label} +{value['added_mib']:.0f} MiB")
+    if parts:
+        lines.append("Peak memory added (VmHWM, fresh process): " + "; ".join(parts) + ".")
+    worst = []
+    for family in raw["families"]:
+        for name in ("robust", "certified"):
+            errors = [e for e in family["results"][name]["error_eps_s"] if e is not None]
+            worst.append(max(errors))
+    lines.append(
+        f"Worst error of `robust` and `certified` over {sizes['accuracy']} points of each set, against the "
+        f"exact distance to the mesh: {max(worst):.2g} eps S."
+    )
+    return "\n".join(lines)
+
+
+def update_readme(path, text):
+    """Replace the text between the mesh-bench markers of ``path``."""
+    readme = Path(path).read_text(encoding="utf-8")
+    pattern = re.compile(r"(<!-- mesh-bench:start -->\n).*?(<!-- mesh-bench:end -->)", re.S)
+    if not pattern.search(readme):
+        raise SystemExit(f"{path} has no mesh-bench markers")
+    Path(path).write_text(
+        pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), readme), encoding="utf-8"
+    )
+
+
+def crossover(seed=0, sizes=(4, 8, 12, 16, 24, 32, 48, 64, 128, 256), n_points=10_000, repeats=15, log=print):
+    """Query time of brute force and of the BVH against the number of triangles.
+
+    One thread, so that the comparison is of the work per point (both broad
+    phases are parallel over points in the same way) and not of how the
+    operating system schedules two threads on a shared machine; the least
+    of ``repeats`` calls, as other processes only ever add time.
+
+    Returns ``{"n": [...], "brute": [...], "bvh": [...], "threshold": int}``
+    with seconds per call, and the largest ``n`` at which brute force was
+    faster.
+    """
+    import numba
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        rng = np.random.default_rng(seed)
+        out = {"n": [], "brute": [], "bvh": []}
+        for n in sizes:
+            vertices, faces = soup(rng, n)
+            points = box_points(rng, vertices, n_points)
+            row = {}
+            for phase in ("brute", "bvh"):
+                mesh = proximity.TriangleMesh(vertices, faces, broad_phase=phase)
+                mesh.distance(points)
+                timing = _timed(lambda m=mesh, p=points: m.distance(p), n_points, repeats)
+                row[phase] = float(np.min(timing["seconds"]))
+            out["n"].append(n)
+            out["brute"].append(row["brute"])
+            out["bvh"].append(row["bvh"])
+            log(f"n={n:4d}  brute {row['brute'] * 1e3:8.3f} ms  bvh {row['bvh'] * 1e3:8.3f} ms")
+    finally:
+        numba.set_num_threads(threads)
+    faster = [n for n, b, h in zip(out["n"], out["brute"], out["bvh"], strict=True) if b <= h]
+    out["threshold"] = max(faster) if faster else 0
+    log(f"brute force was faster up to n = {out['threshold']}")
+    return out
+
+
+def main(argv=None):
+    """Command line: see the module docstring."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.meshes", description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smaller sizes, a smoke run")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default="bench-results", help="directory for meshes.json")
+    parser.add_argument("--crossover", action="store_true", help="brute force against the BVH, n = 4..256")
+    parser.add_argument("--readme", help="rewrite the mesh-bench section of this README from the run")
+    parser.add_argument("--memory-child", nargs=5, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.memory_child:
+        what, n_points, n_major, n_minor, seed = args.memory_child
+        print(json.dumps(_memory_child(what, int(n_points), int(n_major), int(n_minor), int(seed))))
+        return 0
+    if args.crossover:
+        crossover(seed=args.seed)
+        return 0
+    with np.errstate(all="ignore"):
+        raw = run(quick=args.quick, seed=args.seed)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "meshes.json").write_text(json.dumps(raw, indent=1))
+    print(report(raw))
+    print(f"raw data: {out / 'meshes.json'}")
+    if args.readme:
+        update_readme(args.readme, markdown(raw))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

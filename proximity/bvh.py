@@ -1,0 +1,1009 @@
+"""Nearest primitive of a collection: brute force, or a bounding-volume hierarchy.
+
+A collection is a flat list of primitives, each a triangle, a disk or a
+circle, stored as one row of ``params`` and a ``kinds`` code.  The distance
+from a point to the collection is the minimum, over the primitives, of the
+per-primitive method's computed distance (:func:`point_triangle.robust`,
+:func:`point_triangle._eberly_query`, :func:`certified.triangle`,
+:func:`point_disk._any_query`), called with the same arguments as a
+single-shape query, so that a collection answers with exactly the bits the
+per-shape query gives for its nearest primitive.  Among primitives at the
+same computed distance the one with the lowest index wins; primitives whose
+method gives NaN (``eberly`` on a zero-area triangle) are passed over, and a
+row where every primitive gives NaN has no answer.
+
+Brute force and the hierarchy are one traversal: brute force is the
+hierarchy of a single leaf holding every primitive in index order.
+
+Hierarchy
+---------
+Built once, on primitive boxes, by binned surface-area heuristic (``BINS``
+bins on the centroids along each axis, splitting until a node holds at most
+``LEAF_SIZE`` primitives; nodes whose centroids coincide are cut in half by
+index).  Nodes are stored breadth first, so the children of a node are
+adjacent in memory.
+
+Pruning, and why it never changes the answer
+--------------------------------------------
+The traversal visits the nearer child first and skips a node when a lower
+bound on the distance from the point to what it holds exceeds ``best +
+SLACK``.  The bound is the larger of two: the distance to the node's box,
+and to its *slab*: for a unit-or-shorter vector ``u`` and the range
+``[h_min, h_max]`` of ``u . X`` over everything in the node, every point
+there is at least ``max(u . P - h_max, h_min - u . P)`` from ``P``.  A
+node's ``u`` is the mean normal of its primitives, so a flat patch has a
+thin slab that prunes where its box would not (a point far over a tilted
+patch, or near the center of a sphere); a primitive's ``u`` is its own
+normal, and for a point over a face's interior the slab distance is the
+distance itself, so faces that are merely near are skipped without calling
+the method.
+
+These tests never skip a primitive that brute force would pick.  In units
+of ``M``, the largest coordinate magnitude of the point and of every box:
+
+* the tests run on coordinates multiplied by a power of two ``s`` with
+  ``M s`` in ``[0.5, 1)`` (exact), so squares neither overflow nor lose
+  anything that matters to underflow, and their rounding is a few ``eps``;
+  a slab's ``u`` and range carry a few ``eps`` more;
+* every primitive lies in its box and its slab, and each method's computed
+  distance is at least the true distance to them minus a few tens of
+  ``eps M``: ``robust`` is within ``8 eps S`` of the true distance, with
+  ``S <= 2 sqrt(3) M`` for triangles and ``S <= 5 M`` for disks and
+  circles; ``certified`` is within an ulp; ``eberly``'s closest point on a
+  triangle or a disk lies in the plane and the box up to the rounding of
+  its coordinates;
+* ``SLACK`` is ``256 eps M``, several times the sum: a skipped primitive's
+  computed distance exceeds ``best``, so even ties are visited, and the
+  lowest index wins in both.
+
+``eberly``'s circle is the exception: near the axis it takes the rim
+direction from rounding noise, so its closest point can leave the plane by
+up to ``R``.  For that method circles are bounded by the cube ``C +- R``
+and have no slab; the tree keeps a second set of boxes for it.
+
+Certified
+---------
+Where the certified filter leaves a primitive's answer to its exact
+fallback (rational arithmetic, in Python), the kernel only knows an
+interval around it, from ``robust``'s bound, and uses the interval's upper
+end to prune.  A point for which such a primitive could be the nearest is
+finished outside the kernel: every candidate within the bound is asked
+through the per-shape certified query, exact fallback included.
+
+The methods are dispatched by code in :func:`_triangle` and
+:func:`point_disk._any_query`: a new per-primitive method is one more line.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import njit, prange
+from numba.core import types
+
+from . import certified, point_disk, point_triangle
+from ._fp import EPS
+from .results import Feature
+
+TRIANGLE = 0
+DISK = 1
+CIRCLE = 2
+N_PARAMS = 10  # triangle: V0, V1, V2; disk and circle: C, unit normal, normal as given, R
+
+LEAF_SIZE = 4
+BINS = 16
+SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see the module docstring)
+BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
+NONE = int(Feature.NONE)
+
+_C1F = types.Array(types.float64, 1, "C", readonly=True)
+_C2F = types.Array(types.float64, 2, "C", readonly=True)
+_C1I = types.Array(types.int64, 1, "C", readonly=True)
+_C1B = types.Array(types.int8, 1, "C", readonly=True)
+_OUT1 = types.Array(types.float64, 1, "C")
+_OUT2 = types.Array(types.float64, 2, "C")
+_OUT_I8 = types.Array(types.int8, 1, "C")
+_OUT_I64 = types.Array(types.int64, 1, "C")
+_OUT_B = types.Array(types.boolean, 1, "C")
+
+
+@njit(inline="always", error_model="numpy")
+def _triangle(method, q, k, px, py, pz):
+    """The per-triangle method with code ``method`` (``point_triangle.METHODS``).
+
+    Returns ``(status, distance, sqr_distance, x, y, z, feature, b0, b1, b2)``;
+    ``status`` is ``certified.EXACT`` where the certified filter leaves the
+    answer to its exact fallback.
+    """
+    if method == point_triangle.ROBUST:
+        d, sqr, x, y, z, f, b0, b1, b2 = point_triangle.robust(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )
+        return certified.CERTAIN, d, sqr, x, y, z, f, b0, b1, b2
+    if method == point_triangle.CERTIFIED:
+        return certified.triangle(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )
+    if method == point_triangle.EBERLY:
+        d, sqr, x, y, z, f, b0, b1, b2 = point_triangle._eberly_query(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )
+        return certified.CERTAIN, d, sqr, x, y, z, f, b0, b1, b2
+    # A code this dispatch does not know: no answer, rather than another method's.
+    nan = math.nan
+    return certified.CERTAIN, nan, nan, nan, nan, nan, NONE, nan, nan, nan
+
+
+@njit(inline="always", error_model="numpy")
+def _evaluate(tri_method, round_method, kinds, q, k, px, py, pz):
+    """Primitive ``k``'s answer: ``(status, d, sqr, x, y, z, feature, a0, a1, a2, equidistant)``.
+
+    ``a`` is the barycentric triple for a triangle, ``(height, radial, NaN)``
+    for a disk or a circle.
+    """
+    if kinds[k] == TRIANGLE:
+        st, d, sqr, x, y, z, f, b0, b1, b2 = _triangle(tri_method, q, k, px, py, pz)
+        return st, d, sqr, x, y, z, f, b0, b1, b2, False
+    st, d, sqr, x, y, z, f, e, h, r = point_disk._any_query(
+        round_method,
+        kinds[k] == DISK,
+        q[k, 0],
+        q[k, 1],
+        q[k, 2],
+        q[k, 3],
+        q[k, 4],
+        q[k, 5],
+        q[k, 6],
+        q[k, 7],
+        q[k, 8],
+        q[k, 9],
+        px,
+        py,
+        pz,
+    )
+    return st, d, sqr, x, y, z, f, h, r, math.nan, e
+
+
+@njit(inline="always", error_model="numpy")
+def _interval(kinds, q, k, px, py, pz):
+    """Bounds ``(lo, hi)`` on the certified distance from the robust one.
+
+    ``robust`` is within ``8 eps S`` of the exact distance and ``certified``
+    within one ulp of it, below ``2 eps S``; ``S`` is bounded by ``1.75`` times
+    the largest coordinate difference (``sqrt(3)`` and rounding), plus ``R``
+    for a disk or a circle.
+    """
+    if kinds[k] == TRIANGLE:
+        d = point_triangle.robust(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )[0]
+        m = 0.0
+        for v in range(3):
+            m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
+        scale = 1.75 * m
+    else:
+        d = point_disk._query(
+            point_disk.ROBUST,
+            kinds[k] == DISK,
+            q[k, 0],
+            q[k, 1],
+            q[k, 2],
+            q[k, 3],
+            q[k, 4],
+            q[k, 5],
+            q[k, 6],
+            q[k, 7],
+            q[k, 8],
+            q[k, 9],
+            px,
+            py,
+            pz,
+        )[0]
+        m = max(max(abs(q[k, 0] - px), abs(q[k, 1] - py)), abs(q[k, 2] - pz))
+        scale = 1.75 * m + q[k, 9]
+    w = 16.0 * EPS * scale
+    return d - w, d + w
+
+
+@njit(inline="always", error_model="numpy")
+def _box_sqr(bounds, node, s, qx, qy, qz):
+    # Squared distance from the scaled point to the scaled box: 0 inside.
+    dx = max(max(bounds[node, 0] * s - qx, qx - bounds[node, 3] * s), 0.0)
+    dy = max(max(bounds[node, 1] * s - qy, qy - bounds[node, 4] * s), 0.0)
+    dz = max(max(bounds[node, 2] * s - qz, qz - bounds[node, 5] * s), 0.0)
+    return dx * dx + dy * dy + dz * dz
+
+
+@njit(inline="always", error_model="numpy")
+def _bound_sqr(boxes, k, s, qx, qy, qz):
+    """Squared lower bound on the distance from the scaled point to what box and slab ``k`` hold.
+
+    ``boxes[k]`` is ``(lo, hi, u, h_min, h_max)``; see the module docstring.
+    """
+    t = boxes[k, 6] * qx + boxes[k, 7] * qy + boxes[k, 8] * qz
+    h = max(max(t - boxes[k, 10] * s, boxes[k, 9] * s - t), 0.0)
+    return max(_box_sqr(boxes, k, s, qx, qy, qz), h * h)
+
+
+@njit(inline="always", error_model="numpy")
+def _culled(cull, k, s, qx, qy, qz, reach):
+    """Whether stored primitive ``k`` is farther than ``reach`` (scaled) by its box or its slab.
+
+    ``cull[k]`` is ``(lo, hi, u, h_min, h_max)``; see the module docstring.
+    """
+    if _box_sqr(cull, k, s, qx, qy, qz) > reach * reach:
+        return True
+    t = cull[k, 6] * qx + cull[k, 7] * qy + cull[k, 8] * qz
+    return max(t - cull[k, 10] * s, cull[k, 9] * s - t) > reach
+
+
+@njit(inline="always", error_model="numpy")
+def _scale(px, py, pz, magnitude):
+    """The power of two ``s`` that brings ``M`` (point and boxes) into ``[0.5, 1)``."""
+    m = max(max(abs(px), abs(py)), max(abs(pz), magnitude))
+    return math.ldexp(1.0, -max(math.frexp(m)[1], -1000))
+
+
+_QUERY_SIGNATURE = types.void(
+    types.int64,
+    types.int64,
+    _C1B,
+    _C2F,
+    _C1I,
+    _C2F,
+    _C2F,
+    _C1I,
+    _C1I,
+    types.int64,
+    types.float64,
+    _C2F,
+    _C1I,
+    _OUT1,
+    _OUT1,
+    _OUT2,
+    _OUT_I8,
+    _OUT2,
+    _OUT_B,
+    _OUT_I64,
+    _OUT1,
+    types.boolean,
+)
+
+
+@njit(_QUERY_SIGNATURE, parallel=True, cache=True, error_model="numpy")
+def _nearest(
+    tri_method,
+    round_method,
+    kinds,
+    params,
+    index,
+    cull,
+    bounds,
+    child,
+    count,
+    depth,
+    magnitude,
+    points,
+    order,
+    dist,
+    sqr,
+    point,
+    feature,
+    extra,
+    flag,
+    prim,
+    undecided,
+    full,
+):
+    """Nearest primitive to each point; with ``full=False`` only ``dist`` and ``undecided`` are written.
+
+    ``kinds``, ``params``, ``index`` (the caller's index of each stored
+    primitive) and ``cull`` (its box and slab) are in leaf order.  Node
+    ``i`` is a leaf holding stored primitives ``child[i] .. child[i] +
+    count[i] - 1`` when ``count[i] > 0``, and otherwise has children
+    ``child[i]`` and ``child[i] + 1``; ``bounds`` are the node boxes and
+    ``magnitude`` the largest coordinate magnitude among them.  Points are
+    visited in the sequence ``order``, so that consecutive queries walk the
+    same part of the tree.
+
+    Certified answers the filter leaves undecided are not known here: such
+    a primitive only narrows ``[lo, hi]`` around its answer (from the robust
+    one), and where one could be the nearest, ``undecided[i]`` is set to the
+    distance bound below which candidates must be resolved exactly
+    (otherwise NaN).
+    """
+    n = points.shape[0]
+    sentinel = index.shape[0]
+    for block in prange((n + BLOCK - 1) // BLOCK):
+        stack_node = np.empty(depth + 1, np.int64)
+        stack_sqr = np.empty(depth + 1)
+        for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
+            i = order[j]
+            px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+            best = math.inf
+            best_index = sentinel
+            best_k = -1
+            upper = math.inf  # least upper bound of the undecided answers
+            lowest = math.inf  # least lower bound of the undecided answers
+            # The winner's answer, kept as found rather than computed again.
+            w_sqr, w_x, w_y, w_z, w_a0, w_a1, w_a2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            w_feature = NONE
+            w_flag = False
+            if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+                s = _scale(px, py, pz, magnitude)
+                qx, qy, qz = px * s, py * s, pz * s
+                reach = math.inf  # scaled distance beyond which primitives are skipped
+                limit = math.inf  # its square, for the boxes
+                node = 0
+                sp = 0
+                while True:
+                    c = count[node]
+                    if c > 0:
+                        first = child[node]
+                        for k in range(first, first + c):
+                            if _culled(cull, k, s, qx, qy, qz, reach):
+                                continue
+                            r = _evaluate(tri_method, round_method, kinds, params, k, px, py, pz)
+                            if r[0] == certified.CERTAIN:
+                                d = r[1]
+                                idx = index[k]
+                                if d < best or (d == best and idx < best_index):
+                                    best = d
+                                    best_index = idx
+                                    best_k = k
+                                    w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                                    w_feature = r[6]
+                                    w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                                    w_flag = r[10]
+                            else:
+                                lo, hi = _interval(kinds, params, k, px, py, pz)
+                                lowest = min(lowest, lo)
+                                upper = min(upper, hi)
+                            reach = min(best, upper) * s + SLACK
+                            limit = reach * reach
+                        node = -1
+                    else:
+                        left = child[node]
+                        right = left + 1
+                        dl = _bound_sqr(bounds, left, s, qx, qy, qz)
+                        dr = _bound_sqr(bounds, right, s, qx, qy, qz)
+                        if dr < dl:
+                            left, right, dl, dr = right, left, dr, dl
+                        if dl <= limit:
+                            if dr <= limit:
+                                stack_node[sp] = right
+                                stack_sqr[sp] = dr
+                                sp += 1
+                            node = left
+                        else:
+                            node = -1
+                    if node < 0:
+                        while sp > 0:
+                            sp -= 1
+                            if stack_sqr[sp] <= limit:
+                                node = stack_node[sp]
+                                break
+                        if node < 0:
+                            break
+            # An undecided answer could be the least (or tie with it): resolve
+            # every candidate up to the bound exactly, outside the kernel.
+            undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
+            if best_k < 0:
+                dist[i] = math.nan
+                if full:
+                    sqr[i] = math.nan
+                    for c in range(3):
+                        point[i, c] = math.nan
+                        extra[i, c] = math.nan
+                    feature[i] = NONE
+                    flag[i] = False
+                    prim[i] = -1
+                continue
+            dist[i] = best
+            if full:
+                sqr[i] = w_sqr
+                point[i, 0] = w_x
+                point[i, 1] = w_y
+                point[i, 2] = w_z
+                feature[i] = np.int8(w_feature)
+                extra[i, 0] = w_a0
+                extra[i, 1] = w_a1
+                extra[i, 2] = w_a2
+                flag[i] = w_flag
+                prim[i] = best_index
+
+
+_GATHER_SIGNATURE = types.int64(
+    _C2F, _C2F, _C1I, _C1I, types.int64, types.float64, _C1F, types.float64, _OUT_I64
+)
+
+
+@njit(_GATHER_SIGNATURE, cache=True, error_model="numpy")
+def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
+    """Stored primitives not culled at distance ``bound`` from ``p``, by the same tests as the search.
+
+    Writes their positions to ``out`` and returns how many.  Every primitive
+    whose computed distance is at most ``bound`` is among them.
+    """
+    px, py, pz = p[0], p[1], p[2]
+    s = _scale(px, py, pz, magnitude)
+    qx, qy, qz = px * s, py * s, pz * s
+    reach = bound * s + SLACK
+    limit = reach * reach
+    stack = np.empty(depth + 2, np.int64)
+    stack[0] = 0
+    sp = 1
+    found = 0
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if _bound_sqr(bounds, node, s, qx, qy, qz) > limit:
+            continue
+        if count[node] > 0:
+            for k in range(child[node], child[node] + count[node]):
+                if not _culled(cull, k, s, qx, qy, qz, reach):
+                    out[found] = k
+                    found += 1
+        else:
+            stack[sp] = child[node]
+            stack[sp + 1] = child[node] + 1
+            sp += 2
+    return found
+
+
+_MORTON_SIGNATURE = types.int16[::1](_C2F)
+
+
+@njit(_MORTON_SIGNATURE, cache=True, error_model="numpy")
+def _morton(points):
+    """15-bit Morton codes of the points on a 32^3 grid over their finite bounding box.
+
+    Points with a non-finite coordinate go to the last cell.
+    """
+    n = points.shape[0]
+    low = np.full(3, math.inf)
+    high = np.full(3, -math.inf)
+    for i in range(n):
+        if math.isfinite(points[i, 0]) and math.isfinite(points[i, 1]) and math.isfinite(points[i, 2]):
+            for a in range(3):
+                low[a] = min(low[a], points[i, a])
+                high[a] = max(high[a], points[i, a])
+    span = max(max(high[0] - low[0], high[1] - low[1]), high[2] - low[2])
+    inv = 31.0 / span if 0.0 < span < math.inf else 0.0
+    codes = np.empty(n, np.int16)
+    for i in range(n):
+        code = 0
+        for a in range(3):
+            g = (points[i, a] - low[a]) * inv
+            if not (g >= 0.0):  # NaN as well
+                g = 0.0 if g < 0.0 else 31.0
+            x = int(min(g, 31.0))
+            # Spread the five bits of x to every third position.
+            x = (x | (x << 8)) & 0x100F
+            x = (x | (x << 4)) & 0x10C3
+            x = (x | (x << 2)) & 0x1249
+            code |= x << a
+        codes[i] = code
+    return codes
+
+
+_BUILD_SIGNATURE = types.Tuple((types.int64[:, ::1], types.int64[::1], types.int64))(_C2F, _C2F, types.int64)
+
+
+@njit(_BUILD_SIGNATURE, cache=True, error_model="numpy")
+def _build(lo, hi, leaf_size):
+    """Topology of a hierarchy over boxes ``lo``, ``hi`` (n, 3), n >= 1.
+
+    Returns ``(nodes, order, depth)``: ``nodes[i] = (child, count)`` as in
+    :func:`_nearest`, ``order[j]`` the primitive stored at position ``j``,
+    and the largest depth of a leaf.
+    """
+    n = lo.shape[0]
+    cap = 2 * n - 1
+    child = np.zeros(cap, np.int64)
+    count = np.zeros(cap, np.int64)
+    level = np.zeros(cap, np.int64)
+    order = np.arange(n)
+    cen = np.empty((n, 3))
+    for j in range(n):
+        for a in range(3):
+            # Halves first: the sum of two coordinates near 1e308 would overflow.
+            cen[j, a] = lo[j, a] * 0.5 + hi[j, a] * 0.5
+    bin_count = np.empty(BINS, np.int64)
+    bin_lo = np.empty((BINS, 3))
+    bin_hi = np.empty((BINS, 3))
+    right_area = np.empty(BINS)
+    right_count = np.empty(BINS, np.int64)
+    child[0] = 0
+    count[0] = n
+    n_nodes = 1
+    depth = 0
+    i = 0
+    # Breadth first: a node's children get the next two free indices, so
+    # every node is processed after its parent by a plain loop.
+    while i < n_nodes:
+        start = child[i]
+        cnt = count[i]
+        depth = max(depth, level[i])
+        if cnt <= leaf_size:
+            i += 1
+            continue
+        end = start + cnt
+        cmin = np.full(3, math.inf)
+        cmax = np.full(3, -math.inf)
+        for j in range(start, end):
+            p = order[j]
+            for a in range(3):
+                cmin[a] = min(cmin[a], cen[p, a])
+                cmax[a] = max(cmax[a], cen[p, a])
+        best_cost = math.inf
+        best_axis = -1
+        best_bin = 0
+        for a in range(3):
+            extent = cmax[a] - cmin[a]
+            if not (extent > 0.0 and extent < math.inf):
+                continue
+            scale = BINS / extent
+            bin_count[:] = 0
+            bin_lo[:] = math.inf
+            bin_hi[:] = -math.inf
+            for j in range(start, end):
+                p = order[j]
+                b = min(int((cen[p, a] - cmin[a]) * scale), BINS - 1)
+                bin_count[b] += 1
+                for c in range(3):
+                    bin_lo[b, c] = min(bin_lo[b, c], lo[p, c])
+                    bin_hi[b, c] = max(bin_hi[b, c], hi[p, c])
+            # Sweep from the right, then from the left, costing each plane
+            # between bins b and b + 1 as area x count on either side.
+            xl, yl, zl = math.inf, math.inf, math.inf
+            xh, yh, zh = -math.inf, -math.inf, -math.inf
+            total = 0
+            for b in range(BINS - 1, 0, -1):
+                total += bin_count[b]
+                xl, yl, zl = min(xl, bin_lo[b, 0]), min(yl, bin_lo[b, 1]), min(zl, bin_lo[b, 2])
+                xh, yh, zh = max(xh, bin_hi[b, 0]), max(yh, bin_hi[b, 1]), max(zh, bin_hi[b, 2])
+                right_count[b] = total
+                dx, dy, dz = xh - xl, yh - yl, zh - zl
+                right_area[b] = dx * dy + dy * dz + dz * dx if total > 0 else 0.0
+            xl, yl, zl = math.inf, math.inf, math.inf
+            xh, yh, zh = -math.inf, -math.inf, -math.inf
+            total = 0
+            for b in range(BINS - 1):
+                total += bin_count[b]
+                xl, yl, zl = min(xl, bin_lo[b, 0]), min(yl, bin_lo[b, 1]), min(zl, bin_lo[b, 2])
+                xh, yh, zh = max(xh, bin_hi[b, 0]), max(yh, bin_hi[b, 1]), max(zh, bin_hi[b, 2])
+                if total == 0 or right_count[b + 1] == 0:
+                    continue
+                dx, dy, dz = xh - xl, yh - yl, zh - zl
+                cost = (dx * dy + dy * dz + dz * dx) * total + right_area[b + 1] * right_count[b + 1]
+                if cost < best_cost:
+                    best_cost = cost
+                    best_axis = a
+                    best_bin = b
+        if best_axis < 0:
+            # Coincident centroids (or costs beyond the float range): halves by index.
+            mid = start + cnt // 2
+        else:
+            scale = BINS / (cmax[best_axis] - cmin[best_axis])
+            lo_j = start
+            hi_j = end - 1
+            while lo_j <= hi_j:
+                p = order[lo_j]
+                b = min(int((cen[p, best_axis] - cmin[best_axis]) * scale), BINS - 1)
+                if b <= best_bin:
+                    lo_j += 1
+                else:
+                    order[lo_j] = order[hi_j]
+                    order[hi_j] = p
+                    hi_j -= 1
+            mid = lo_j
+        left = n_nodes
+        child[left] = start
+        count[left] = mid - start
+        child[left + 1] = mid
+        count[left + 1] = end - mid
+        level[left] = level[i] + 1
+        level[left + 1] = level[i] + 1
+        child[i] = left
+        count[i] = 0
+        n_nodes += 2
+        i += 1
+    nodes = np.empty((n_nodes, 2), np.int64)
+    nodes[:, 0] = child[:n_nodes]
+    nodes[:, 1] = count[:n_nodes]
+    return nodes, order, depth
+
+
+_REFIT_SIGNATURE = types.float64[:, ::1](_C1I, _C1I, _C1B, _C2F, _C2F)
+
+
+@njit(_REFIT_SIGNATURE, cache=True, error_model="numpy")
+def _refit(child, count, kinds, params, cull):
+    """Node boxes and slabs ``(lo, hi, u, h_min, h_max)``, ``(m, 11)``, over the stored primitives.
+
+    ``u`` is the normalised sum of the primitives' slab directions (their
+    normals), shortened as in :func:`_shorter_than_one`, and ``[h_min,
+    h_max]`` the range of ``u . X`` over the triangles' vertices and the
+    corners of the other primitives' boxes; an overflowing range is
+    unbounded.  A flat patch of faces gets a thin slab, which prunes where
+    its box alone would not (a point over the middle of a tilted patch).
+    """
+    m = child.shape[0]
+    bounds = np.empty((m, 11))
+    start = np.empty(m, np.int64)
+    end = np.empty(m, np.int64)
+    # Children come after their parent, so a backward sweep sees them first.
+    for i in range(m - 1, -1, -1):
+        for a in range(3):
+            bounds[i, a] = math.inf
+            bounds[i, 3 + a] = -math.inf
+        if count[i] > 0:
+            start[i] = child[i]
+            end[i] = child[i] + count[i]
+            for k in range(start[i], end[i]):
+                for a in range(3):
+                    bounds[i, a] = min(bounds[i, a], cull[k, a])
+                    bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
+        else:
+            start[i] = start[child[i]]
+            end[i] = end[child[i] + 1]
+            for k in range(child[i], child[i] + 2):
+                for a in range(3):
+                    bounds[i, a] = min(bounds[i, a], bounds[k, a])
+                    bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
+    for i in range(m):
+        ux, uy, uz = 0.0, 0.0, 0.0
+        for k in range(start[i], end[i]):
+            ux += cull[k, 6]
+            uy += cull[k, 7]
+            uz += cull[k, 8]
+        length = math.sqrt(ux * ux + uy * uy + uz * uz)
+        if length > 0.0 and length < math.inf:
+            shrink = (1.0 - 2.0**-40) / length
+            ux, uy, uz = ux * shrink, uy * shrink, uz * shrink
+        else:
+            ux, uy, uz = 0.0, 0.0, 0.0
+        low = math.inf
+        high = -math.inf
+        for k in range(start[i], end[i]):
+            if kinds[k] == TRIANGLE:
+                for v in range(3):
+                    h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
+                    low = min(low, h)
+                    high = max(high, h)
+            else:
+                for corner in range(8):
+                    x = cull[k, 3 if corner & 1 else 0]
+                    y = cull[k, 4 if corner & 2 else 1]
+                    z = cull[k, 5 if corner & 4 else 2]
+                    h = ux * x + uy * y + uz * z
+                    low = min(low, h)
+                    high = max(high, h)
+        if not (math.isfinite(low) and math.isfinite(high)):
+            low, high = -math.inf, math.inf
+        bounds[i, 6] = ux
+        bounds[i, 7] = uy
+        bounds[i, 8] = uz
+        bounds[i, 9] = low
+        bounds[i, 10] = high
+    return bounds
+
+
+def _readonly(array, dtype):
+    array = np.ascontiguousarray(array, dtype=dtype)
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+@dataclass(frozen=True, eq=False)
+class Tree:
+    """A broad phase: primitives in leaf order and the nodes over them.
+
+    Attributes
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``
+        ``TRIANGLE``, ``DISK`` or ``CIRCLE`` for each stored primitive.
+    params : ndarray of float64, shape ``(n, 10)``
+        Each stored primitive's data (see :data:`N_PARAMS`).
+    index : ndarray of int64, shape ``(n,)``
+        The caller's index of each stored primitive.
+    child, count : ndarray of int64, shape ``(m,)``
+        Node topology (see :func:`_nearest`); one leaf for brute force.
+    bounds : ndarray of float64, shape ``(m, 11)``
+        Node boxes and slabs ``(lo, hi, u, h_min, h_max)`` (see :func:`_refit`).
+    cull : ndarray of float64, shape ``(n, 11)``
+        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``.
+    loose_bounds, loose_cull : ndarray of float64
+        The same for ``eberly`` (the same arrays unless there are circles).
+    depth : int
+        Depth of the deepest leaf.
+    """
+
+    kinds: np.ndarray
+    params: np.ndarray
+    index: np.ndarray
+    child: np.ndarray
+    count: np.ndarray
+    bounds: np.ndarray
+    cull: np.ndarray
+    loose_bounds: np.ndarray
+    loose_cull: np.ndarray
+    depth: int
+
+    @property
+    def nodes(self):
+        """Number of nodes; 1 for brute force."""
+        return len(self.child)
+
+    def boxes(self, loose):
+        """``(node boxes, primitive culling data, magnitude)``, tight or loose."""
+        bounds, cull = (self.loose_bounds, self.loose_cull) if loose else (self.bounds, self.cull)
+        # A coordinate that overflowed leaves its box unbounded, which prunes
+        # nothing; the scale is set by the finite ones.
+        corners = np.abs(bounds[0, :6])
+        return bounds, cull, float(np.max(corners, where=np.isfinite(corners), initial=0.0))
+
+
+def _shorter_than_one(u):
+    # Any vector no longer than 1 gives a valid slab; shrink the rounded
+    # unit vector by far more than its rounding so that it is one.
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        length = np.sqrt(np.sum(u * u, axis=1, keepdims=True))
+        u = u / length * (1.0 - 2.0**-40)
+    return np.where(np.isfinite(u).all(axis=1, keepdims=True), u, 0.0)
+
+
+def _slab(u, points):
+    """``(h_min, h_max)`` of ``u . X`` over ``points (n, k, 3)``; unbounded where it overflows."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        h = np.einsum("nkj,nj->nk", points, u)
+    ok = np.isfinite(h).all(axis=1)
+    return np.where(ok, h.min(axis=1), -np.inf), np.where(ok, h.max(axis=1), np.inf)
+
+
+def primitive_cull(kinds, params):
+    """Box and slab of each primitive, ``(n, 11)``, and the loose ones for ``eberly``.
+
+    Triangles: the vertices' extremes (exact), and the slab of the unit
+    normal (none for a zero-area triangle).  Disks and circles: the center
+    plus or minus ``R sqrt(1 - u_a^2)`` on each axis ``a``, computed as ``R
+    sqrt(u_b^2 + u_c^2) / |u|`` so that no cancellation enters (its rounding
+    is a few ``eps`` of ``R``, inside the pruning slack), and the slab of
+    their plane.  Loose data bound circles by the cube ``C +- R``, without a
+    slab.
+    """
+    n = len(kinds)
+    cull = np.empty((n, 11))
+    tri = kinds == TRIANGLE
+    v = params[tri, :9].reshape(-1, 3, 3)
+    cull[tri, 0:3] = v.min(axis=1)
+    cull[tri, 3:6] = v.max(axis=1)
+    with np.errstate(invalid="ignore", over="ignore"):
+        normal = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    u = _shorter_than_one(normal)
+    cull[tri, 6:9] = u
+    cull[tri, 9], cull[tri, 10] = _slab(u, v)
+    round_ = ~tri
+    loose = cull
+    if round_.any():
+        c = params[round_, 0:3]
+        sq = params[round_, 3:6] ** 2
+        r = params[round_, 9:10]
+        # 1 - u_a^2 as the sum of the other two squares: subtracting from 1
+        # would cancel, and the square root would magnify that to sqrt(eps).
+        others = sq[:, [1, 2, 0]] + sq[:, [2, 0, 1]]
+        with np.errstate(over="ignore"):
+            extent = r * np.sqrt(others) / np.sqrt(sq.sum(axis=1, keepdims=True))
+            cull[round_, 0:3] = c - extent
+            cull[round_, 3:6] = c + extent
+        u = _shorter_than_one(params[round_, 3:6])
+        cull[round_, 6:9] = u
+        cull[round_, 9], cull[round_, 10] = _slab(u, c[:, None, :])
+        circle = kinds == CIRCLE
+        if circle.any():
+            loose = cull.copy()
+            with np.errstate(over="ignore"):
+                loose[circle, 0:3] = params[circle, 0:3] - params[circle, 9:10]
+                loose[circle, 3:6] = params[circle, 0:3] + params[circle, 9:10]
+            loose[circle, 6:9] = 0.0
+            loose[circle, 9] = -np.inf
+            loose[circle, 10] = np.inf
+    return cull, loose
+
+
+def _tree(kinds, params, order, child, count, depth, cull):
+    tight, loose = cull
+    kinds = _readonly(kinds[order], np.int8)
+    params = _readonly(params[order], np.float64)
+    tight = _readonly(tight[order], np.float64)
+    bounds = _refit(child, count, kinds, params, tight)
+    loose_bounds = bounds
+    if loose is not cull[0]:
+        loose = _readonly(loose[order], np.float64)
+        loose_bounds = _refit(child, count, kinds, params, loose)
+    else:
+        loose = tight
+    return Tree(
+        kinds=kinds,
+        params=params,
+        index=_readonly(order, np.int64),
+        child=child,
+        count=count,
+        bounds=_readonly(bounds, np.float64),
+        cull=tight,
+        loose_bounds=_readonly(loose_bounds, np.float64),
+        loose_cull=loose,
+        depth=int(depth),
+    )
+
+
+def brute(kinds, params):
+    """The broad phase of no hierarchy: one leaf holding every primitive, in order.
+
+    Parameters
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``, n >= 1
+    params : ndarray of float64, shape ``(n, 10)``
+
+    Returns
+    -------
+    Tree
+    """
+    n = len(kinds)
+    cull = primitive_cull(kinds, params)
+    return _tree(kinds, params, np.arange(n), _readonly([0], np.int64), _readonly([n], np.int64), 0, cull)
+
+
+def build(kinds, params, leaf_size=LEAF_SIZE):
+    """A bounding-volume hierarchy over the primitives, built once.
+
+    Parameters
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``, n >= 1
+    params : ndarray of float64, shape ``(n, 10)``
+    leaf_size : int
+        Most primitives a leaf holds.
+
+    Returns
+    -------
+    Tree
+    """
+    cull = primitive_cull(kinds, params)
+    lo = _readonly(cull[0][:, 0:3], np.float64)
+    hi = _readonly(cull[0][:, 3:6], np.float64)
+    nodes, order, depth = _build(lo, hi, int(leaf_size))
+    child = _readonly(nodes[:, 0], np.int64)
+    count = _readonly(nodes[:, 1], np.int64)
+    return _tree(kinds, params, order, child, count, depth, cull)
+
+
+#: Batches at least this large are queried in Morton order of the points.
+SORT_MIN = 4096
+
+
+def _visiting_order(points):
+    """Morton order of the points: neighbours in space are queried one after the other.
+
+    Consecutive queries then walk the same nodes and faces, which stay in
+    cache; with points in random order every query fetches its path from
+    memory.  The order changes only the time, never an answer.
+    """
+    if len(points) < SORT_MIN:
+        return np.arange(len(points))
+    # A stable sort of 16-bit keys is a radix sort in NumPy: linear time.
+    return np.argsort(_morton(points), kind="stable")
+
+
+def nearest(tree, tri_method, round_method, points, full, loose=False):
+    """Nearest primitive to each of the validated points ``(n, 3)``.
+
+    Parameters
+    ----------
+    tree : Tree
+    tri_method, round_method : int
+        Codes of ``point_triangle.METHODS`` and ``point_disk.METHODS``.
+    points : ndarray of float64, shape ``(n, 3)``
+    full : bool
+        Whether to fill every output or only ``distance``.
+    loose : bool
+        Use the loose boxes (``eberly``).
+
+    Returns
+    -------
+    dict of ndarray
+        ``distance``, ``sqr_distance``, ``point``, ``feature``, ``extra``
+        (barycentric, or height and radial), ``flag`` (equidistant) and
+        ``index`` (the caller's index of the nearest primitive, -1 for none);
+        all but ``distance`` empty unless ``full``.
+    """
+    points = _readonly(points, np.float64)
+    n = points.shape[0]
+    m = n if full else 0
+    out = dict(
+        distance=np.empty(n),
+        sqr_distance=np.empty(m),
+        point=np.empty((m, 3)),
+        feature=np.empty(m, np.int8),
+        extra=np.empty((m, 3)),
+        flag=np.empty(m, np.bool_),
+        index=np.empty(m, np.int64),
+    )
+    undecided = np.empty(n)
+    bounds, cull, magnitude = tree.boxes(loose)
+    order = _readonly(_visiting_order(points), np.int64)
+    # Work per point varies by orders of magnitude (a point at the center of
+    # a sphere is equidistant from every face), so blocks are handed out
+    # one at a time rather than split evenly between threads up front.
+    with numba.parallel_chunksize(1):
+        _nearest(
+            tri_method,
+            round_method,
+            tree.kinds,
+            tree.params,
+            tree.index,
+            cull,
+            bounds,
+            tree.child,
+            tree.count,
+            tree.depth,
+            magnitude,
+            points,
+            order,
+            *out.values(),
+            undecided,
+            full,
+        )
+    rows = np.flatnonzero(~np.isnan(undecided))
+    if len(rows):
+        _resolve(tree, rows, points, undecided, out, full, cull, bounds, magnitude)
+    return out
+
+
+def _resolve(tree, rows, points, undecided, out, full, cull, bounds, magnitude):
+    """Finish rows whose nearest primitive may be an undecided certified answer.
+
+    Every candidate within the row's bound goes through the per-shape
+    ``certified`` query, which runs the exact fallback where needed, so each
+    answer is the one a single-shape query gives; the least wins, ties to
+    the lowest index.
+    """
+    from .shapes import Circle, Disk, Triangle
+
+    makers = {
+        TRIANGLE: lambda q: Triangle(q[:, :9].reshape(-1, 3, 3)),
+        DISK: lambda q: Disk(q[:, 0:3], q[:, 6:9], q[:, 9]),
+        CIRCLE: lambda q: Circle(q[:, 0:3], q[:, 6:9], q[:, 9]),
+    }
+    positions = np.empty(len(tree.kinds), np.int64)
+    for i in rows:
+        p = points[i]
+        bound = undecided[i]
+        found = _gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, p, bound, positions)
+        candidates = positions[:found]
+        answers = []  # (distance, caller's index, kind, the per-shape result)
+        for code, make in makers.items():
+            chosen = candidates[tree.kinds[candidates] == code]
+            if len(chosen) == 0:
+                continue
+            r = make(tree.params[chosen]).closest_point(p, method="certified")
+            for j, idx in enumerate(tree.index[chosen]):
+                if not np.isnan(r.distance[j]):
+                    answers.append((float(r.distance[j]), int(idx), code, r[j]))
+        if not answers:
+            continue
+        d, idx, code, r = min(answers, key=lambda a: (a[0], a[1]))
+        out["distance"][i] = d
+        if full:
+            out["sqr_distance"][i] = r.sqr_distance
+            out["point"][i] = r.point
+            out["feature"][i] = r.feature
+            out["index"][i] = idx
+            if code == TRIANGLE:
+                out["extra"][i] = r.barycentric
+                out["flag"][i] = False
+            else:
+                out["extra"][i] = (r.height, r.radial, np.nan)
+                out["flag"][i] = bool(getattr(r, "equidistant", False))

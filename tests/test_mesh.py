@@ -1,0 +1,309 @@
+"""Triangle meshes: brute force and BVH agree bit for bit, and with the per-triangle method.
+
+And the answers are within the robust bound of the exact reference.
+"""
+
+import numpy as np
+import pytest
+
+import proximity
+from benchmarks.meshes import box_points, icosphere, near_points, soup, torus
+from proximity import Feature, TriangleMesh
+from proximity.scene import BRUTE_FORCE_MAX
+from tests import exact
+
+EPS = 2.0**-52
+METHODS = list(TriangleMesh.methods)
+FIELDS = ("distance", "sqr_distance", "point", "feature", "barycentric", "face")
+
+
+def _meshes():
+    rng = np.random.default_rng(7)
+    return {
+        "icosphere": icosphere(2),  # 320 faces
+        "torus": torus(16, 10),  # 320 faces
+        # A third of the faces collinear, with two or with three coincident vertices.
+        "soup": soup(rng, 240, size=0.15, degenerate=0.3),
+    }
+
+
+MESHES = _meshes()
+
+
+def _points(name, n=300, seed=3):
+    vertices, faces = MESHES[name]
+    rng = np.random.default_rng(seed)
+    size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
+    return np.concatenate(
+        [
+            near_points(rng, vertices, faces, n // 3, 0.02 * size),
+            box_points(rng, vertices, n // 3),
+            vertices[rng.integers(0, len(vertices), n // 6)],  # exactly on the mesh
+            rng.normal(size=(n // 6, 3)) * 10 * size,  # far away
+        ]
+    )
+
+
+def assert_same(a, b):
+    for name in FIELDS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_brute_force_and_bvh_agree_bit_for_bit(name, method):
+    vertices, faces = MESHES[name]
+    points = _points(name)
+    brute = TriangleMesh(vertices, faces, broad_phase="brute")
+    bvh = TriangleMesh(vertices, faces, broad_phase="bvh")
+    assert (brute.broad_phase, bvh.broad_phase) == ("brute", "bvh")
+    assert bvh._tree.nodes > 1
+    assert_same(brute.closest_point(points, method=method), bvh.closest_point(points, method=method))
+    np.testing.assert_array_equal(brute.distance(points, method=method), bvh.distance(points, method=method))
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_the_mesh_answers_with_the_nearest_faces_own_answer(name, method):
+    """The distance is the least per-triangle distance (NaN faces passed over), ties to the lowest index."""
+    vertices, faces = MESHES[name]
+    points = _points(name, n=120)
+    r = TriangleMesh(vertices, faces).closest_point(points, method=method)
+    per_face = proximity.Triangle(vertices[faces]).closest_point(points[:, None, :], method=method)
+    with np.errstate(invalid="ignore"):
+        face = np.nanargmin(per_face.distance, axis=1)
+    rows = np.arange(len(points))
+    np.testing.assert_array_equal(r.face, face)
+    for field in ("distance", "sqr_distance", "point", "feature", "barycentric"):
+        np.testing.assert_array_equal(getattr(r, field), getattr(per_face, field)[rows, face], err_msg=field)
+
+
+def _exact_nearest(tri, p):
+    """``(exact squared distance, nearest face)`` over every face."""
+    return min((exact.triangle_sqr_distance(t, p), f) for f, t in enumerate(tri))
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_robust_is_within_its_bound_of_the_exact_distance_to_the_mesh(name):
+    vertices, faces = MESHES[name]
+    tri = vertices[faces]
+    points = _points(name, n=60, seed=11)[::4]
+    r = TriangleMesh(vertices, faces).closest_point(points)
+    for k, p in enumerate(points):
+        sqr, nearest = _exact_nearest(tri, p)
+        # The minimum over faces moves by at most the bound of either face.
+        scale = max(exact.triangle_scale(tri[nearest], p), exact.triangle_scale(tri[r.face[k]], p))
+        error = exact.error_in_units(float(r.distance[k]), exact.triangle_distance(tri[nearest], p), scale)
+        assert error <= 8.0, (name, p.tolist(), error)
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_points_on_vertices_are_at_distance_zero(name):
+    vertices, faces = MESHES[name]
+    used = np.unique(faces)
+    mesh = TriangleMesh(vertices, faces)
+    for method in ("robust", "certified"):
+        r = mesh.closest_point(vertices[used], method=method)
+        assert (r.distance == 0).all() and (r.sqr_distance == 0).all(), method
+        np.testing.assert_array_equal(r.point, vertices[used])
+        assert np.isin(r.feature, [Feature.VERTEX0, Feature.VERTEX1, Feature.VERTEX2]).all()
+
+
+def test_points_on_faces_are_within_the_bound_of_zero():
+    """Points exactly on faces (dyadic vertices and weights): robust <= 8 eps S, certified exactly 0."""
+    rng = np.random.default_rng(5)
+    vertices = rng.integers(-64, 64, size=(40, 3)).astype(np.float64)
+    faces = np.array([rng.choice(40, 3, replace=False) for _ in range(60)])
+    tri = vertices[faces]
+    pick = rng.integers(0, len(faces), 24)
+    weights = rng.integers(1, 8, size=(24, 3)) / 16.0  # dyadic, so every product and sum below is exact
+    weights[:, 0] = 1.0 - weights[:, 1] - weights[:, 2]
+    points = np.einsum("ni,nij->nj", weights, tri[pick])  # exact: small integers times 2^-k
+    assert all(exact.triangle_sqr_distance(tri[f], p) == 0 for f, p in zip(pick, points, strict=True))
+    mesh = TriangleMesh(vertices, faces)
+    r = mesh.closest_point(points)
+    for k, p in enumerate(points):
+        scale = exact.triangle_scale(tri[pick[k]], p)
+        assert exact.error_in_units(float(r.distance[k]), 0, scale) <= 8.0
+    assert (mesh.distance(points, method="certified") == 0).all()
+
+
+def test_degenerate_faces_are_queried_like_any_other():
+    """A mesh of one collinear and one point-like face: robust answers for the segment and the point."""
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [5, 5, 5]])
+    mesh = TriangleMesh(vertices, [[0, 1, 2], [3, 3, 3]], broad_phase="bvh")
+    r = mesh.closest_point([[1.5, 2.0, 0.0], [5.0, 5.0, 6.0], [3.0, 0.0, 0.0]])
+    assert r.distance.tolist() == [2.0, 1.0, 1.0]
+    assert r.face.tolist() == [0, 1, 0]
+    np.testing.assert_array_equal(r.point, [[1.5, 0, 0], [5, 5, 5], [2, 0, 0]])
+    # eberly gives NaN for a point-like face (0 / 0): no answer, rather than a wrong one.
+    point_like = TriangleMesh(vertices, [[3, 3, 3], [3, 3, 3]], broad_phase="bvh")
+    e = point_like.closest_point([[1.5, 2.0, 0.0]], method="eberly")
+    assert np.isnan(e.distance).all() and (e.face == -1).all() and (e.feature == Feature.NONE).all()
+    assert point_like.distance([5.0, 5.0, 8.0]) == 3.0
+
+
+@pytest.mark.parametrize("scale, offset", [(1e-200, 0.0), (1e200, 0.0), (1.0, 1e10), (2.0**-1000, 0.0)])
+def test_extreme_coordinates_keep_brute_force_and_bvh_equal(scale, offset):
+    vertices, faces = MESHES["torus"]
+    vertices = vertices * scale + offset
+    points = _points("torus", n=90) * scale + offset
+    # certified's exact fallback cannot round a squared distance beyond the float range (at 1e200).
+    for method in [m for m in METHODS if not (m == "certified" and scale > 1e150)]:
+        brute = TriangleMesh(vertices, faces, broad_phase="brute").closest_point(points, method=method)
+        bvh = TriangleMesh(vertices, faces, broad_phase="bvh").closest_point(points, method=method)
+        assert_same(brute, bvh)
+        if method == "robust":
+            assert np.isfinite(bvh.distance).all()
+
+
+def test_permuting_faces_permutes_the_answer():
+    vertices, faces = MESHES["icosphere"]
+    points = _points("icosphere", n=60)
+    order = np.random.default_rng(2).permutation(len(faces))
+    a = TriangleMesh(vertices, faces).closest_point(points)
+    b = TriangleMesh(vertices, faces[order]).closest_point(points)
+    np.testing.assert_array_equal(a.distance, b.distance)
+    # Same face, unless another face is at exactly the same distance (an edge or a vertex).
+    d_faces = proximity.Triangle(vertices[faces]).distance(points[:, None, :])
+    assert (d_faces[np.arange(len(points)), order[b.face]] == a.distance).all()
+
+
+def test_shapes_scalars_nan_rows_and_frozen_results():
+    vertices, faces = MESHES["icosphere"]
+    mesh = TriangleMesh(vertices, faces)
+    assert isinstance(mesh, proximity.Shape) and mesh.batch_shape == () and mesh.dim == 3
+    one = mesh.closest_point([0.0, 0.0, 3.0])
+    assert np.ndim(one.distance) == 0 and isinstance(one.feature, Feature) and one.point.shape == (3,)
+    assert np.ndim(one.face) == 0
+    assert isinstance(proximity.distance(mesh, [0.0, 0.0, 3.0]), np.floating)
+    grid = mesh.closest_point(np.zeros((2, 5, 3)) + [0.0, 0.0, 2.0])
+    assert (
+        grid.distance.shape == (2, 5)
+        and grid.point.shape == (2, 5, 3)
+        and grid.barycentric.shape == (2, 5, 3)
+    )
+    assert not grid.distance.flags.writeable and not grid.face.flags.writeable
+    assert mesh.closest_point(np.zeros((0, 3))).distance.shape == (0,)
+    r = mesh.closest_point([[np.nan, 0, 0], [0, 0, 2], [np.inf, 0, 0]])
+    assert np.isnan(r.distance[[0, 2]]).all() and r.face[[0, 2]].tolist() == [-1, -1]
+    assert r.feature[0] == Feature.NONE and np.isfinite(r.distance[1]) and r.face[1] >= 0
+    with pytest.raises(AttributeError):
+        mesh.vertices = vertices
+    assert not mesh.vertices.flags.writeable and not mesh.faces.flags.writeable
+
+
+def test_the_broad_phase_is_chosen_by_size():
+    vertices, faces = soup(np.random.default_rng(1), BRUTE_FORCE_MAX + 1)
+    assert TriangleMesh(vertices, faces[:BRUTE_FORCE_MAX]).broad_phase == "brute"
+    assert TriangleMesh(vertices, faces).broad_phase == "bvh"
+
+
+@pytest.mark.parametrize(
+    "vertices, faces, kwargs, message",
+    [
+        ([[0, 0, 0], [1, 0, 0]], [[0, 1, 1]], {}, None),
+        ([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]], {}, r"vertices must have shape \(V, 3\); got shape \(3, 2\)"),
+        ([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 1, 2]], {}, "vertices must be finite"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.0, 1.0, 2.0]], {}, "faces must be an integer array"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]], {}, r"0 <= index < 3; got 3 at index \(0, 2\)"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, -1, 2]], {}, "got -1"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.zeros((0, 3), int), {}, r"F >= 1; got shape \(0, 3\)"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], {"broad_phase": "kd"}, "broad_phase must be one of"),
+    ],
+)
+def test_invalid_meshes_are_refused_with_a_message_naming_the_argument(vertices, faces, kwargs, message):
+    if message is None:
+        TriangleMesh(vertices, faces, **kwargs)  # a degenerate face is valid
+        return
+    with pytest.raises(ValueError, match=message):
+        TriangleMesh(vertices, faces, **kwargs)
+
+
+def test_invalid_queries_are_refused():
+    mesh = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    with pytest.raises(ValueError, match=r"points must have shape \(\.\.\., 3\); got shape \(4, 2\)"):
+        mesh.distance(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="method must be one of"):
+        mesh.closest_point([0, 0, 1], method="fast")
+
+
+# -- the trimesh drop-in ---------------------------------------------------------------
+
+
+def test_trimesh_drop_in_returns_trimeshs_tuple():
+    from proximity.trimesh_compat import closest_point
+
+    vertices, faces = MESHES["icosphere"]
+    points = _points("icosphere", n=60)
+    closest, distance, triangle_id = closest_point((vertices, faces), points)
+    assert closest.shape == (60, 3) and distance.shape == (60,) and triangle_id.shape == (60,)
+    assert closest.dtype == np.float64 and distance.dtype == np.float64 and triangle_id.dtype == np.int64
+    assert closest.flags.writeable
+    r = TriangleMesh(vertices, faces).closest_point(points)
+    np.testing.assert_array_equal(distance, r.distance)
+    np.testing.assert_array_equal(triangle_id, r.face)
+    with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
+        closest_point((vertices, faces), [0.0, 0.0, 1.0])
+    with pytest.raises(TypeError, match="mesh must be"):
+        closest_point(vertices, points)
+
+
+def test_trimesh_drop_in_agrees_with_trimesh():
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("rtree")
+    pytest.importorskip("scipy")
+    from proximity import trimesh_compat
+
+    vertices, faces = MESHES["torus"]
+    tm = trimesh.Trimesh(vertices, faces, process=False)
+    rng = np.random.default_rng(4)
+    points = box_points(rng, vertices, 200) * 1.5
+    theirs = trimesh.proximity.closest_point(tm, points)
+    ours = trimesh_compat.closest_point(tm, points)
+    assert [type(a) for a in ours] == [type(a) for a in theirs]
+    assert [a.shape for a in ours] == [a.shape for a in theirs]
+    assert [a.dtype for a in ours] == [a.dtype for a in theirs]
+    # Torus faces of size 0.1: trimesh's absolute tolerances cost it nothing here.
+    np.testing.assert_allclose(ours[1], theirs[1], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ours[0], theirs[0], rtol=0, atol=1e-12)
+    d = proximity.Triangle(vertices[faces]).distance(points[:, None, :])
+    # The ids differ only where another face is at the same distance.
+    assert np.allclose(d[np.arange(len(points)), theirs[2]], ours[1], rtol=0, atol=1e-12)
+    # The mesh is converted once and kept while unchanged.
+    assert trimesh_compat._mesh(tm) is trimesh_compat._mesh(tm)
+    tm.vertices = tm.vertices + 1.0
+    moved = trimesh_compat.closest_point(tm, points)[1]
+    np.testing.assert_array_equal(moved, TriangleMesh(vertices + 1.0, faces).distance(points))
+
+
+# -- the adapters ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["fcl", "trimesh", "pybullet"])
+def test_adapters_answer_for_meshes_within_their_documented_tolerance(name):
+    import adapters
+
+    pytest.importorskip({"fcl": "fcl", "trimesh": "trimesh", "pybullet": "pybullet"}[name])
+    if name == "trimesh":
+        pytest.importorskip("rtree")
+        pytest.importorskip("scipy")
+    vertices, faces = MESHES["torus"]
+    mesh = TriangleMesh(vertices, faces)
+    rng = np.random.default_rng(8)
+    # Off the surface: fcl and pybullet give no nearest point in contact.
+    points = box_points(rng, vertices, 40) * 1.3
+    points = points[mesh.distance(points) > 0.05]
+    with adapters.get(name) as backend:
+        r = backend.closest_point(mesh, points)
+    assert type(r.result) is proximity.MeshResult and r.result.distance.shape == (len(points),)
+    assert (np.asarray(r.failure) == adapters.Failure.OK).all()
+    ours = mesh.closest_point(points)
+    assert (np.abs(r.distance - ours.distance) <= r.tolerance).all()
+    assert r.model.primitive == backend.primitives["mesh"]
+    if "face" in r.unknown:
+        assert (r.result.face == -1).all()
+    else:
+        # The library's face is a nearest one: at our distance, up to the tolerance.
+        d = proximity.Triangle(vertices[faces[r.result.face]]).distance(points)
+        assert (np.abs(d - ours.distance) <= r.tolerance).all()
