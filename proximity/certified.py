@@ -44,7 +44,7 @@ from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, fma, pow2_scale
 from .point_circle import decompose, rim_direction
-from .results import Feature
+from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
 
 U = 2.0**-53
 SLACK = 2.0**-990  # absolute slack, in the scaled frame: covers underflowed terms
@@ -55,17 +55,6 @@ PRED4 = 40.0 * U
 
 CERTAIN = 0.0
 EXACT = 1.0
-
-
-NONE = int(Feature.NONE)
-VERTEX0 = int(Feature.VERTEX0)
-VERTEX1 = int(Feature.VERTEX1)
-VERTEX2 = int(Feature.VERTEX2)
-EDGE01 = int(Feature.EDGE01)
-EDGE12 = int(Feature.EDGE12)
-EDGE20 = int(Feature.EDGE20)
-FACE = int(Feature.FACE)
-RIM = int(Feature.RIM)
 
 
 @njit(inline="always", error_model="numpy")

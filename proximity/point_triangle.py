@@ -59,16 +59,7 @@ from numba.core import types
 from . import _exact, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, pow2_scale
 from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
-from .results import Feature
-
-NONE = int(Feature.NONE)
-VERTEX0 = int(Feature.VERTEX0)
-VERTEX1 = int(Feature.VERTEX1)
-VERTEX2 = int(Feature.VERTEX2)
-EDGE01 = int(Feature.EDGE01)
-EDGE12 = int(Feature.EDGE12)
-EDGE20 = int(Feature.EDGE20)
-FACE = int(Feature.FACE)
+from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
 TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
 

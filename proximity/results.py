@@ -34,6 +34,17 @@ class Feature(enum.IntEnum):
 
 _FEATURES = list(Feature)  # indexed by code + 1
 
+# Plain integer codes, for the compiled kernels (which compare ints).
+NONE = int(Feature.NONE)
+VERTEX0 = int(Feature.VERTEX0)
+VERTEX1 = int(Feature.VERTEX1)
+VERTEX2 = int(Feature.VERTEX2)
+EDGE01 = int(Feature.EDGE01)
+EDGE12 = int(Feature.EDGE12)
+EDGE20 = int(Feature.EDGE20)
+FACE = int(Feature.FACE)
+RIM = int(Feature.RIM)
+
 
 def _frozen(value):
     if isinstance(value, np.ndarray):

@@ -19,7 +19,9 @@ from hypothesis import strategies as st
 from benchmarks import scenes
 
 __all__ = [
+    "DISK_FAMILIES",
     "SEEDS",
+    "TRIANGLE_FAMILIES",
     "SIZES",
     "RigidMotion",
     "degenerate_scenes",
@@ -264,3 +266,30 @@ def rigid_motions(max_translation: float = 10.0) -> Strategy[RigidMotion]:
         quaternions.map(_rotation),
         st.tuples(coordinate, coordinate, coordinate).map(np.array),
     )
+
+
+# -- every family, by name ------------------------------------------------------------
+
+TRIANGLE_FAMILIES = {
+    "well_conditioned": well_conditioned_scenes(),
+    "near_surface": near_surface_scenes(),
+    "sliver": sliver_scenes(),
+    "degenerate": degenerate_scenes(),
+    "needle": needle_scenes(),
+    "small": small_scenes(),
+    "offset": offset_scenes(),
+    "far_points": far_points_scenes(),
+    "magnitude": magnitude_scenes(),
+    "on_feature": on_feature_scenes(),
+}
+"""A strategy per triangle family, with its default parameter range."""
+
+DISK_FAMILIES = {
+    "well_conditioned": disk_well_conditioned_scenes(),
+    "axis": disk_axis_scenes(),
+    "rim": disk_rim_scenes(),
+    "in_plane": disk_in_plane_scenes(),
+    "offset": disk_offset_scenes(),
+    "unnormalized": disk_unnormalized_scenes(),
+}
+"""A strategy per circle and disk family, with its default parameter range."""

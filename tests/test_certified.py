@@ -9,26 +9,6 @@ from benchmarks import scenes
 from proximity import Circle, Disk, Feature, Triangle
 from tests import exact, strategies
 
-TRIANGLE_FAMILIES = {
-    "well_conditioned": strategies.well_conditioned_scenes(),
-    "near_surface": strategies.near_surface_scenes(),
-    "sliver": strategies.sliver_scenes(),
-    "degenerate": strategies.degenerate_scenes(),
-    "needle": strategies.needle_scenes(),
-    "small": strategies.small_scenes(),
-    "offset": strategies.offset_scenes(),
-    "far_points": strategies.far_points_scenes(),
-    "magnitude": strategies.magnitude_scenes(),
-    "on_feature": strategies.on_feature_scenes(),
-}
-DISK_FAMILIES = {
-    "well_conditioned": strategies.disk_well_conditioned_scenes(),
-    "axis": strategies.disk_axis_scenes(),
-    "rim": strategies.disk_rim_scenes(),
-    "in_plane": strategies.disk_in_plane_scenes(),
-    "offset": strategies.disk_offset_scenes(),
-    "unnormalized": strategies.disk_unnormalized_scenes(),
-}
 VOLUME = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -41,10 +21,10 @@ def check_triangle(vertices, point, r):
         assert r.distance == 0.0, context
 
 
-@pytest.mark.parametrize("family", sorted(TRIANGLE_FAMILIES))
+@pytest.mark.parametrize("family", sorted(strategies.TRIANGLE_FAMILIES))
 def test_triangles_within_one_ulp(family):
     @VOLUME
-    @given(TRIANGLE_FAMILIES[family])
+    @given(strategies.TRIANGLE_FAMILIES[family])
     def check(scene):
         r = Triangle(scene.vertices).closest_point(scene.points, method="certified")
         for k in range(len(scene.points)):
@@ -54,13 +34,13 @@ def test_triangles_within_one_ulp(family):
 
 
 @pytest.mark.parametrize("kind", ["disk", "circle"])
-@pytest.mark.parametrize("family", sorted(DISK_FAMILIES))
+@pytest.mark.parametrize("family", sorted(strategies.DISK_FAMILIES))
 def test_circles_and_disks_within_one_ulp(family, kind):
     closest = exact.disk_closest if kind == "disk" else exact.circle_closest
     cls = Disk if kind == "disk" else Circle
 
     @VOLUME
-    @given(DISK_FAMILIES[family])
+    @given(strategies.DISK_FAMILIES[family])
     def check(scene):
         r = cls(scene.center, scene.normal, scene.radius).closest_point(scene.points, method="certified")
         for k in range(len(scene.points)):

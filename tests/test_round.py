@@ -63,21 +63,11 @@ def test_on_axis_point_is_a_fixed_rim_point():
     np.testing.assert_allclose(np.linalg.norm(a.point - c.center), 2.0, rtol=1e-15)
 
 
-FAMILIES = {
-    "well_conditioned": strategies.disk_well_conditioned_scenes(),
-    "axis": strategies.disk_axis_scenes(),
-    "rim": strategies.disk_rim_scenes(),
-    "in_plane": strategies.disk_in_plane_scenes(),
-    "offset": strategies.disk_offset_scenes(),
-    "unnormalized": strategies.disk_unnormalized_scenes(),
-}
-
-
 @pytest.mark.parametrize("kind", sorted(SHAPES))
-@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("family", sorted(strategies.DISK_FAMILIES))
 def test_robust_bound_on_every_family(family, kind):
     @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-    @given(FAMILIES[family])
+    @given(strategies.DISK_FAMILIES[family])
     def check(scene):
         r = SHAPES[kind](scene.center, scene.normal, scene.radius).closest_point(scene.points)
         for k in range(len(scene.points)):

@@ -100,24 +100,10 @@ def test_region_boundaries(offset, height, method):
         check_triangle(UNIT, point, r[k])
 
 
-FAMILIES = {
-    "well_conditioned": strategies.well_conditioned_scenes(),
-    "near_surface": strategies.near_surface_scenes(),
-    "sliver": strategies.sliver_scenes(),
-    "degenerate": strategies.degenerate_scenes(),
-    "needle": strategies.needle_scenes(),
-    "small": strategies.small_scenes(),
-    "offset": strategies.offset_scenes(),
-    "far_points": strategies.far_points_scenes(),
-    "magnitude": strategies.magnitude_scenes(),
-    "on_feature": strategies.on_feature_scenes(),
-}
-
-
-@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("family", sorted(strategies.TRIANGLE_FAMILIES))
 def test_robust_bound_on_every_family(family):
     @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-    @given(FAMILIES[family])
+    @given(strategies.TRIANGLE_FAMILIES[family])
     def check(scene):
         r = Triangle(scene.vertices).closest_point(scene.points)
         for k in range(len(scene.points)):
