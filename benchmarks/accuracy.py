@@ -60,6 +60,15 @@ def errors(distances, ref):
     )
 
 
+def ulp_errors(distances, ref):
+    """Errors of float distances in ulps of the exact distance ``d*``; inf where not finite.
+
+    Where ``d* == 0`` the unit is the smallest subnormal, so that only an
+    exact zero is 0 ulps (see :func:`tests.exact.ulps`).
+    """
+    return np.array([exact.ulps(float(d), d_exact) for d, (d_exact, _) in zip(distances, ref, strict=True)])
+
+
 def measure(kind, family, n, seed, methods=METHODS):
     """``{method: Accuracy}`` for ``n`` queries of ``family`` (seeded)."""
     scene = family(np.random.default_rng(seed), n)

@@ -20,7 +20,8 @@ Rows:
 5. Peak memory of a 10M-pair query, above its inputs, against the size of its
    outputs plus 64 MB.
 6. Start-up: ``import proximity``, and a new process's first result with the
-   compiled kernels cached on disk.
+   compiled kernels cached on disk; with ``--compile-time``, also the first
+   run ever, which compiles every kernel into an empty cache.
 """
 
 import argparse
@@ -214,8 +215,9 @@ def _process_time(code, env=None):
     return time.perf_counter() - start
 
 
-def startup_rows(repeats):
-    """Row 6: import time, first result with a warm cache, and compile time."""
+def startup_rows(repeats, compile_time=False):
+    """Row 6: import time, first result with a warm cache, and (optionally) the
+    time to compile every kernel into an empty cache, which takes minutes."""
     first = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros((10, 3)))"
     single = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))"
     disk = (
@@ -241,6 +243,8 @@ def startup_rows(repeats):
                 "unit": "s (ratio column: fraction of the limit)",
             }
         )
+    if not compile_time:
+        return rows
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         seconds = _process_time(first + "; " + single.split("; ", 1)[1] + "; " + disk.split("; ", 1)[1], env)
@@ -289,14 +293,14 @@ def format_table(rows):
     return "\n".join(lines)
 
 
-def run(quick=False):
+def run(quick=False, compile_time=False):
     """Measure every row; ``quick`` shrinks the sizes for a smoke run."""
     n = 100_000 if quick else 1_000_000
     repeats = 3 if quick else REPEATS
     rows = triangle_rows(n, repeats) + round_rows(n, repeats)
     rows += loop_row(2_000 if quick else 20_000, repeats)
     rows.append(memory_row(1_000_000 if quick else 10_000_000))
-    rows += startup_rows(3 if quick else REPEATS)
+    rows += startup_rows(3 if quick else REPEATS, compile_time)
     return rows
 
 
@@ -304,8 +308,13 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
     parser.add_argument("--json", help="also write the rows to this file")
+    parser.add_argument(
+        "--compile-time",
+        action="store_true",
+        help="also time compiling every kernel into an empty cache (minutes)",
+    )
     args = parser.parse_args(argv)
-    rows = run(args.quick)
+    rows = run(args.quick, args.compile_time)
     text = format_table(rows)
     header = f"numba threads: {proximity_threads()}; median of {3 if args.quick else REPEATS} repeats\n\n"
     print(header + text)

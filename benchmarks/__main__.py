@@ -1,0 +1,128 @@
+"""Run the benchmark suite: ``python -m benchmarks`` (what ``make bench`` runs).
+
+Steps, each from the saved output of the one before:
+
+1. the suite (:mod:`benchmarks.suite`), with a progress bar on stderr,
+   writes ``OUT/raw.json``;
+2. the charts (:mod:`benchmarks.charts`) and ``OUT/report.md``
+   (:mod:`benchmarks.report`) are drawn from that file;
+3. the speed comparison (``benchmarks.speed``, when present) runs, its
+   output is saved to ``OUT/speed.txt`` and added to the report.
+
+Options: ``--quick`` for a smoke run (small batches; about half a minute
+for the suite on two cores, kernels cached), ``--seed``,
+``--out DIR`` (default ``bench-results``), ``--report-only`` to redraw the
+charts and report from existing raw data, ``--no-speed`` to skip step 3, and
+``--publish`` to copy the charts to ``docs/`` and rewrite the benchmark
+section of ``README.md`` from the same data.
+"""
+
+import argparse
+import contextlib
+import dataclasses
+import importlib
+import importlib.util
+import io
+import sys
+import time
+import traceback
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+class _Tee(io.TextIOBase):
+    """Write to several streams: the speed step prints as it goes and is also saved."""
+
+    def __init__(self, *streams):
+        self.streams = streams
+
+    def write(self, text):
+        for stream in self.streams:
+            stream.write(text)
+        return len(text)
+
+    def flush(self):
+        for stream in self.streams:
+            stream.flush()
+
+
+def run_speed(quick, path):
+    """Run ``benchmarks.speed.main``, echoing and saving its output to ``path``.
+
+    Returns
+    -------
+    bool
+        False if the step raised (its traceback is saved with the output);
+        True if it ran or is not there yet.
+    """
+    if importlib.util.find_spec("benchmarks.speed") is None:
+        print("benchmarks.speed is not there yet: speed step skipped", file=sys.stderr)
+        path.unlink(missing_ok=True)
+        return True
+    speed = importlib.import_module("benchmarks.speed")
+    captured = io.StringIO()
+    ok = True
+    with contextlib.redirect_stdout(_Tee(sys.stdout, captured)):
+        try:
+            returned = speed.main(["--quick"] if quick else [])
+        except Exception:  # the step's failure is reported, after the suite's results are safe
+            traceback.print_exc(file=captured)
+            traceback.print_exc()
+            returned, ok = None, False
+    text = captured.getvalue()
+    if isinstance(returned, str) and returned not in text:
+        text += returned
+    path.write_text(text, encoding="utf-8")
+    return ok
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks", description="Accuracy, speed and stability of every method and backend."
+    )
+    parser.add_argument("--quick", action="store_true", help="a smoke run: small batches, three K")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every scene (default 0)")
+    parser.add_argument("--out", type=Path, default=Path("bench-results"), help="output directory")
+    parser.add_argument(
+        "--report-only", action="store_true", help="redraw charts and report from OUT/raw.json"
+    )
+    parser.add_argument("--no-speed", action="store_true", help="skip the speed comparison step")
+    parser.add_argument(
+        "--publish",
+        action="store_true",
+        help="copy the charts to docs/ and rewrite README.md's benchmark section",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+
+    # Imported here so that --help answers without loading numba and the libraries.
+    from benchmarks import charts, report, suite
+
+    out = args.out
+    raw_path = out / "raw.json"
+    speed_path = out / "speed.txt"
+    ok = True
+    if not args.report_only:
+        speed_path.unlink(missing_ok=True)  # a previous run's, which this run's report must not show
+        config = suite.QUICK if args.quick else suite.DEFAULT
+        config = dataclasses.replace(config, seed=args.seed)
+        start = time.perf_counter()
+        raw = suite.run(config, progress=not args.no_progress)
+        suite.save(raw, raw_path)
+        print(f"raw results: {raw_path} ({time.perf_counter() - start:.0f} s)", file=sys.stderr)
+    raw = suite.load(raw_path)
+    pngs = charts.draw_all(raw, out)
+    report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
+    if not args.report_only and not args.no_speed:
+        ok = run_speed(raw["meta"]["config"]["quick"], speed_path)
+        report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
+    print(f"report: {out / 'report.md'}", file=sys.stderr)
+    if args.publish:
+        report.publish(raw, pngs, docs=ROOT / "docs", readme=ROOT / "README.md")
+        print("published: docs/*.png and README.md's benchmark section", file=sys.stderr)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

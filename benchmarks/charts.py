@@ -1,0 +1,559 @@
+"""Charts of a saved benchmark run (matplotlib, PNG).
+
+Drawn from the raw results only (:func:`benchmarks.suite.load`):
+
+``accuracy_speed.png``
+    For each query type, queries per second against the worst and median
+    error, in ``eps * S`` and in ulps of ``d*``, one marker per method or
+    backend, with the Pareto front of those that answered every query.
+``stability_triangle.png``, ``stability_round.png``
+    Each sweep of :mod:`benchmarks.scenes`: the worst error against the
+    swept difficulty, one line per method or backend, over a strip that
+    shows the share of queries with no answer, so that failures are seen
+    where they begin.
+``tessellation.png``
+    For backends that cut circles and disks into ``K`` segments: error and
+    time per query against ``K``, with the sagitta bound and proximity's
+    ``robust`` for comparison.
+"""
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks import summary
+
+#: Colours and markers that stay the same for an entity in every chart.
+STYLE = {
+    "eberly": ("tab:orange", "s"),
+    "robust": ("tab:blue", "o"),
+    "certified": ("tab:green", "D"),
+    "fcl": ("tab:red", "^"),
+    "trimesh": ("tab:purple", "v"),
+    "trimesh[raw]": ("tab:pink", "<"),
+    "pybullet": ("tab:brown", ">"),
+}
+_SPARE = [("tab:olive", "P"), ("tab:cyan", "X"), ("tab:gray", "*"), ("black", "h")]
+
+#: Smallest error drawn: an exact answer (error 0) is drawn here.
+FLOOR = 1e-2
+
+#: Top of the error axes.  In ulps, where ``d* = 0`` the unit is the smallest
+#: subnormal, so errors reach 1e300 and beyond; above this they are written out.
+CAP = {"error_eps_s": 10.0**307.5, "error_ulps": 1e32}
+
+#: robust's bound, drawn for reference, in eps*S.
+BOUND = 8.0
+
+#: Axis labels of each sweep's difficulty.
+DIFFICULTY = {
+    "near_surface": "distance from the triangle / its size",
+    "sliver": "sliver height / longest edge",
+    "needle": "short edge / long edges",
+    "small": "triangle size",
+    "offset": "offset from the origin (triangle size 1e-3)",
+    "far_points": "distance / triangle size",
+    "magnitude": "coordinate magnitude",
+    "degenerate": "zero-area triangle",
+    "on_feature": "the point is exactly on",
+    "disk_axis": "distance from the axis / R",
+    "disk_rim": "distance from the rim / R",
+    "disk_offset": "offset from the origin (R ~ 1e-3)",
+}
+
+DPI = 100
+
+
+_EXTRA = {}
+
+
+def style(name):
+    """``(colour, marker)`` of an entity; others (a method added later) get spare styles in turn."""
+    if name in STYLE:
+        return STYLE[name]
+    return _EXTRA.setdefault(name, _SPARE[len(_EXTRA) % len(_SPARE)])
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"font.size": 9, "axes.titlesize": 10, "legend.fontsize": 9})
+    return plt
+
+
+def _floor(values):
+    return np.maximum(np.asarray(values, dtype=np.float64), FLOOR)
+
+
+def _save(fig, path):
+    """Write a PNG with a palette of 256 colours: a third of the size, for the same look."""
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, dpi=DPI, format="png")
+    plt.close(fig)
+    buffer.seek(0)
+    with Image.open(buffer) as image:
+        image.convert("RGB").quantize(colors=256).save(path, optimize=True)
+    return path
+
+
+def _subtitle(raw):
+    meta = raw["meta"]
+    cfg = meta["config"]
+    return (
+        f"{meta['command']}  ·  seed {cfg['seed']}  ·  {cfg['n_accuracy']} queries per family  ·  "
+        f"{meta['machine']['cpu']}, {meta['machine']['cores']} cores  ·  {meta['date'][:10]}"
+    )
+
+
+# -- 1. accuracy against speed ---------------------------------------------------------
+
+
+def accuracy_speed(raw, path):
+    """Queries per second against worst and median error, per query type."""
+    plt = _plt()
+    units = list(summary.UNITS)
+    fig, axes = plt.subplots(len(units), 3, figsize=(13, 8.2), squeeze=False)
+    seen = {}
+    for col, kind in enumerate(summary.KINDS):
+        stats = summary.by_kind(raw, kind)
+        for row, unit in enumerate(units):
+            ax = axes[row, col]
+            seen.update(_speed_panel(ax, stats, unit, failures=row == 0))
+            if row == 0:
+                ax.set_title(f"point–{kind}")
+            if row == len(units) - 1:
+                ax.set_xlabel("queries per second (median over families)")
+            if col == 0:
+                ax.set_ylabel(f"error ({summary.UNITS[unit]})")
+    from matplotlib.lines import Line2D
+
+    handles = list(seen.values()) + [
+        Line2D([], [], marker="o", color="gray", ls="", markeredgecolor="black"),
+        Line2D([], [], marker="o", color="gray", ls="", markerfacecolor="white"),
+        Line2D([], [], color="black", ls="--"),
+    ]
+    labels = list(seen) + [
+        "filled: worst",
+        "hollow: median",
+        "Pareto front of the worst error\n(shaded: dominated)",
+    ]
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 6), frameon=False)
+    fig.suptitle("Accuracy against speed: errors over the answered queries of every scene family", y=0.995)
+    fig.text(
+        0.5,
+        0.955,
+        _subtitle(raw) + f"  ·  error 0 drawn at {FLOOR:g}",
+        ha="center",
+        fontsize=8,
+        color="dimgray",
+    )
+    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    return _save(fig, path)
+
+
+def _speed_panel(ax, stats, unit, failures):
+    """One query type and unit: a worst and a median marker per entity; returns legend handles.
+
+    Errors beyond the top of the axis are drawn on its edge with their value;
+    with ``failures``, entities that left queries unanswered say how many.
+    """
+    # Log scales and limits before any data, so that autoscaling never runs:
+    # its margins overflow for errors near the float range (ulps of a zero d*).
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_autoscale_on(False)
+    speeds = [s.qps for s in stats.values() if math.isfinite(s.qps)]
+    errors = [BOUND if unit == "error_eps_s" else 1.0]
+    errors += [
+        e
+        for s in stats.values()
+        for e in (s.worst[unit], s.median[unit])
+        if math.isfinite(e) and e <= CAP[unit]
+    ]
+    if not speeds:
+        return {}
+    ax.set_xlim(min(speeds) / 3, max(speeds) * 3)
+    low, high = math.log10(max(min(errors), FLOOR)), math.log10(max(max(errors), FLOOR))
+    top = min(high + 0.08 * (high - low) + 0.5, math.log10(CAP[unit]))
+    ax.set_ylim(10.0 ** (low - 0.6), 10.0**top)
+    _log_ticks(ax.yaxis, low - 0.6, top)
+    handles, points, off_scale = {}, [], []
+    for name, s in stats.items():
+        colour, marker = style(name)
+        x, worst, median = s.qps, s.worst[unit], s.median[unit]
+        complete = s.failed == 0
+        points.append((x, worst if complete else math.inf))
+        if not math.isfinite(x) or math.isnan(worst):
+            continue
+        # Errors beyond the axis (past the float range, in ulps of a zero d*) sit on its top edge.
+        shown = [min(max(v, FLOOR), 10.0**top) for v in (median, worst)]
+        ax.plot([x, x], shown, color=colour, lw=1, alpha=0.6, zorder=2)
+        handles[name] = ax.scatter(
+            x,
+            shown[1],
+            s=60,
+            color=colour,
+            marker=marker,
+            zorder=3,
+            edgecolors="black",
+            lw=0.5,
+            clip_on=False,
+        )
+        ax.scatter(
+            x,
+            shown[0],
+            s=60,
+            facecolors="white",
+            edgecolors=colour,
+            marker=marker,
+            lw=1.5,
+            zorder=3,
+            clip_on=False,
+        )
+        if worst > 10.0**top:
+            off_scale.append(worst)
+        if failures and not complete:
+            ax.annotate(
+                f"{100 * s.failed / s.n:.2g}% failed",
+                (x, shown[1]),
+                xytext=(6, 4),
+                textcoords="offset points",
+                fontsize=8,
+                color="firebrick",
+            )
+    if off_scale:
+        most = max(off_scale)
+        ax.set_title(
+            f"markers on the top edge: worst beyond {_short(10.0**top)}, up to "
+            + (_short(most) if math.isfinite(most) else "past the float range"),
+            fontsize=8,
+            color="firebrick",
+        )
+    if unit == "error_eps_s":
+        ax.axhline(BOUND, color="gray", ls=":", lw=1)
+        ax.annotate(
+            "8 eps·S",
+            (1, BOUND),
+            xycoords=("axes fraction", "data"),
+            xytext=(-4, 3),
+            textcoords="offset points",
+            ha="right",
+            fontsize=8,
+            color="gray",
+        )
+    ax.grid(True, which="major", alpha=0.3)
+    _draw_front(ax, [points[i] for i in summary.pareto(points)])
+    return handles
+
+
+def _short(x):
+    """``2.2e307`` for 2.2e+307: two digits, a short exponent."""
+    return f"{x:.2g}".replace("e+", "e")
+
+
+def _log_ticks(axis, low, high, most=8):
+    """Decade ticks between ``10**low`` and ``10**high``, at most ``most`` of them.
+
+    Fixed ticks: matplotlib's log locator steps past the axis, and past the
+    float range when the axis ends near it.
+    """
+    from matplotlib.ticker import FixedLocator, LogFormatterSciNotation, NullLocator
+
+    span = max(high - low, 1.0)
+    step = next(k for k in (1, 2, 5, 10, 20, 25, 50, 100, 200) if span / k <= most)
+    first = math.ceil(low / step) * step
+    axis.set_major_locator(FixedLocator([10.0**k for k in range(first, math.floor(high) + 1, step)]))
+    axis.set_major_formatter(LogFormatterSciNotation())
+    if step > 1:
+        axis.set_minor_locator(NullLocator())
+
+
+def _draw_front(ax, front):
+    """The Pareto front as the boundary of the region it dominates, which is shaded.
+
+    ``front`` is sorted by speed; along it the error grows.  A point is
+    dominated when it is left of and above a point of the front.
+    """
+    if not front:
+        return
+    (left, right), (bottom, top) = ax.get_xlim(), ax.get_ylim()
+    xs, ys = [left], [max(front[0][1], FLOOR)]
+    for (x, y), following in zip(front, front[1:] + [(None, top)], strict=True):
+        xs += [x, x]
+        ys += [max(y, FLOOR), max(following[1], FLOOR)]
+    ax.plot(xs, ys, color="black", ls="--", lw=1, zorder=1)
+    ax.fill_between(xs, ys, top, color="gray", alpha=0.08, zorder=0, lw=0)
+    ax.set_xlim(left, right)
+    ax.set_ylim(bottom, top)
+
+
+# -- 2. stability sweeps ------------------------------------------------------------------
+
+#: Sweeps whose difficulty grows as the parameter shrinks: drawn with the
+#: axis reversed, so that every sweep gets harder to the right.
+SMALLER_IS_HARDER = {"near_surface", "sliver", "needle", "small", "disk_axis", "disk_rim"}
+
+
+def _axis_values(name, members):
+    """``(members, x positions, tick labels, scale note)`` of a sweep, harder to the right.
+
+    Numeric sweeps are drawn at ``log10`` of their values (negated where a
+    smaller value is harder) when those are evenly spread, else in order of
+    difficulty at equal steps (``disk_axis`` runs 1e-8, 1e-16, 1e-100,
+    1e-300, 0); categorical ones (``degenerate``) in registry order.
+    """
+    values = [f["difficulty"] for f in members]
+    if any(v is None for v in values):
+        labels = [str(next(iter(f["params"].values()))).replace("_", " ") for f in members]
+        return members, list(range(len(members))), labels, ""
+    sign = -1.0 if name in SMALLER_IS_HARDER else 1.0
+    members = sorted(members, key=lambda f: sign * f["difficulty"])
+    values = [f["difficulty"] for f in members]
+    labels = []
+    for v in values:
+        exponent = round(math.log10(v)) if v > 0 else 0
+        labels.append(
+            "0" if v == 0 else f"$10^{{{exponent}}}$" if math.isclose(v, 10.0**exponent) else f"{v:g}"
+        )
+    if all(v > 0 for v in values):
+        logs = [sign * math.log10(v) for v in values]
+        steps = np.diff(logs)
+        if len(steps) == 0 or steps.max() <= 3 * steps.min():
+            return members, logs, labels, "log scale"
+    return members, list(range(len(values))), labels, "log steps, not to scale"
+
+
+def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
+    """One sweep: the share of failed queries on ``ax_fail``, the worst error on ``ax``."""
+    members, x, ticklabels, note = _axis_values(name, members)
+    x = np.array(x, dtype=np.float64)
+    worst_seen = BOUND
+    any_failure = False
+    for entity in members[0]["results"]:
+        colour, marker = style(entity)
+        stats = [summary.stats([f["results"][entity]]) for f in members]
+        worst = np.array([s.worst[unit] for s in stats])
+        failed = np.array([100.0 * s.failed / s.n for s in stats])
+        answered = np.isfinite(worst)
+        if answered.any():
+            worst_seen = max(worst_seen, float(worst[answered].max()))
+        ax.plot(x[answered], _floor(worst[answered]), color=colour, marker=marker, ms=5, lw=1.3, label=entity)
+        if failed.any():
+            any_failure = True
+            ax_fail.plot(x, failed, color=colour, marker=marker, ms=5, lw=1.3)
+            # Where failures begin: each step of the sweep from none to some.
+            for i in np.flatnonzero(failed > 0):
+                neighbours = [j for j in (i - 1, i + 1) if 0 <= j < len(failed)]
+                if any(failed[j] == 0 for j in neighbours):
+                    ax.axvline(x[i], color=colour, ls=":", lw=1.2, alpha=0.8)
+    ax.axhline(BOUND, color="gray", ls="--", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_ylim(FLOOR / 2, max(worst_seen * 10, 1e2))
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    ax.yaxis.set_major_locator(LogLocator(base=10.0, numticks=8))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(x, ticklabels)
+    ax.grid(True, alpha=0.3)
+    ax_fail.set_ylim(-8, 108)
+    ax_fail.set_yticks([0, 50, 100])
+    ax_fail.tick_params(labelbottom=False)
+    ax_fail.grid(True, alpha=0.3)
+    if not any_failure:
+        ax_fail.text(
+            0.5,
+            0.5,
+            "every query answered",
+            transform=ax_fail.transAxes,
+            ha="center",
+            va="center",
+            fontsize=8,
+            color="dimgray",
+        )
+    pad = 0.4 * (x.max() - x.min()) / max(len(x) - 1, 1) if len(x) > 1 else 0.5
+    ax.set_xlim(x.min() - pad, x.max() + pad)
+    label = DIFFICULTY.get(name, name)
+    ax.set_xlabel(f"{label} ({note})" if note else label, fontsize=8)
+    title = name.removeprefix("disk_").replace("_", " ")
+    ax_fail.set_title(f"{kind}: {title}")
+
+
+def stability(raw, path, kinds, title):
+    """Every sweep of the given query types: worst error and failure share against difficulty."""
+    plt = _plt()
+    panels = [(kind, name, members) for kind in kinds for name, members in summary.sweeps(raw, kind).items()]
+    if not panels:
+        return None
+    ncols = 3
+    nrows = math.ceil(len(panels) / ncols)
+    height = 3.6 * nrows + 1.3
+    fig = plt.figure(figsize=(4.2 * ncols, height))
+    outer = fig.add_gridspec(
+        nrows,
+        ncols,
+        hspace=0.5,
+        wspace=0.25,
+        left=0.065,
+        right=0.985,
+        top=1 - 0.8 / height,
+        bottom=1.05 / height,
+    )
+    handles = {}
+    for i, (kind, name, members) in enumerate(panels):
+        inner = outer[i // ncols, i % ncols].subgridspec(2, 1, height_ratios=(1, 3), hspace=0.08)
+        ax_fail = fig.add_subplot(inner[0])
+        ax = fig.add_subplot(inner[1], sharex=ax_fail)
+        _sweep_panel(ax_fail, ax, kind, name, members)
+        if i % ncols == 0:
+            ax.set_ylabel("worst error (eps·S)")
+            ax_fail.set_ylabel("failed %")
+        for line in ax.get_lines():
+            if not line.get_label().startswith("_"):
+                handles.setdefault(line.get_label(), line)
+    from matplotlib.lines import Line2D
+
+    labels = list(handles) + ["robust's bound, 8 eps·S", "failures begin"]
+    lines = list(handles.values()) + [
+        Line2D([], [], color="gray", ls="--", lw=0.8),
+        Line2D([], [], color="gray", ls=":", lw=1.2),
+    ]
+    fig.legend(lines, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False)
+    fig.suptitle(title, y=1 - 0.1 / height)
+    fig.text(
+        0.5,
+        1 - 0.42 / height,
+        _subtitle(raw) + f"  ·  harder to the right  ·  error 0 drawn at {FLOOR:g}",
+        ha="center",
+        fontsize=8,
+        color="dimgray",
+    )
+    return _save(fig, path)
+
+
+# -- 3. tessellation -------------------------------------------------------------------------
+
+
+def tessellation(raw, path):
+    """Error and time per query against the number of segments ``K``."""
+    records = [r for r in raw.get("tessellation", []) if not r.get("skipped")]
+    if not records:
+        return None
+    plt = _plt()
+    fig, (ax_err, ax_time) = plt.subplots(1, 2, figsize=(13, 5.4))
+    kind_style = {"disk": "-", "circle": "--"}
+    curves = {}
+    for r in records:
+        if r["entity"] == "robust" or r["segments"] is None:
+            continue
+        curves.setdefault((r["entity"], r["kind"]), []).append(r)
+    all_k = sorted({r["segments"] for rs in curves.values() for r in rs})
+    skipped = {(r["entity"], r["kind"]) for r in raw.get("tessellation", []) if r.get("skipped")}
+    for (name, kind), rs in curves.items():
+        rs = sorted(rs, key=lambda r: r["segments"])
+        colour, marker = style(name)
+        k = np.array([r["segments"] for r in rs])
+        worst = np.array([max((e for e in r["error"] if e is not None), default=math.nan) for r in rs])
+        us = np.array([1e6 / r["timing"]["qps"] for r in rs])
+        label = f"{name}, {kind}"
+        ax_err.plot(k, worst, color=colour, marker=marker, ls=kind_style[kind], label=label)
+        ax_time.plot(k, us, color=colour, marker=marker, ls=kind_style[kind], label=label)
+        if (name, kind) in skipped:
+            ax_time.annotate(
+                "larger K: over the time budget",
+                (k[-1], us[-1]),
+                xytext=(8, -4),
+                textcoords="offset points",
+                ha="left",
+                va="top",
+                fontsize=7,
+                color=colour,
+            )
+    if all_k:
+        kk = np.geomspace(min(all_k), max(all_k), 200)
+        s = np.sin(np.pi / (2 * kk))
+        ax_err.plot(kk, 2 * s * s, color="black", lw=1, ls=":", label="sagitta R(1 − cos π/K)")
+    for r in records:
+        if r["entity"] == "robust":
+            worst = max((e for e in r["error"] if e is not None), default=0.0)
+            ax_err.axhline(
+                max(worst, 1e-17),
+                color=style("robust")[0],
+                lw=1,
+                ls=kind_style[r["kind"]],
+                label=f"proximity robust, {r['kind']} (worst)",
+            )
+    for kind in ("disk", "circle"):
+        family = next(
+            (f for f in raw["families"] if f["kind"] == kind and f["name"] == "disk_well_conditioned"), None
+        )
+        timing = family and family["results"].get("robust", {}).get("timing")
+        if timing:
+            ax_time.axhline(
+                1e6 / timing["qps"],
+                color=style("robust")[0],
+                lw=1,
+                ls=kind_style[kind],
+                label=f"proximity robust, {kind} (batch)",
+            )
+    for ax in (ax_err, ax_time):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(True, which="major", alpha=0.3)
+        ax.set_xlabel("segments K")
+    ax_err.set_ylabel("worst |d − d*| for R = 1")
+    ax_time.set_ylabel("time per query (µs)")
+    ax_err.set_title("error: the modelling error, R(1 − cos π/K), dominates")
+    ax_time.set_title("cost: grows with K")
+    handles, labels = [], []
+    for ax in (ax_err, ax_time):
+        for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            if label not in labels:
+                handles.append(h)
+                labels.append(label)
+    fig.legend(handles, labels, loc="lower center", ncol=4, frameon=False)
+    n = records[0]["n"]
+    fig.suptitle(
+        "Tessellated circles and disks: error and cost against the number of segments K "
+        f"({n} queries, R = 1)",
+        y=0.99,
+    )
+    fig.text(0.5, 0.935, _subtitle(raw), ha="center", fontsize=8, color="dimgray")
+    fig.tight_layout(rect=(0, 0.13, 1, 0.93))
+    return _save(fig, path)
+
+
+def draw_all(raw, out):
+    """Draw every chart into directory ``out``; returns ``{name: path}`` of those drawn."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    # Log tick locators overflow, harmlessly, on axes that reach the float range.
+    with np.errstate(over="ignore"):
+        drawn = _draw_all(raw, out)
+    return {name: path for name, path in drawn.items() if path is not None}
+
+
+def _draw_all(raw, out):
+    return {
+        "accuracy_speed": accuracy_speed(raw, out / "accuracy_speed.png"),
+        "stability_triangle": stability(
+            raw,
+            out / "stability_triangle.png",
+            ("triangle",),
+            "Stability of point–triangle queries: worst error and failures along each sweep",
+        ),
+        "stability_round": stability(
+            raw,
+            out / "stability_round.png",
+            ("disk", "circle"),
+            "Stability of point–disk and point–circle queries: worst error and failures along each sweep",
+        ),
+        "tessellation": tessellation(raw, out / "tessellation.png"),
+    }

@@ -1,0 +1,181 @@
+"""Statistics of saved raw results: what the charts and the report show.
+
+Everything here reads the dict written by :func:`benchmarks.suite.save`
+and nothing else, so that charts and tables can be redrawn from a saved run.
+Error statistics are over the answered rows only; rows without an answer
+are counted by reason instead.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+KINDS = ("triangle", "disk", "circle")
+
+#: Units of the error, as stored in each record, and how to say them.
+UNITS = {
+    "error_eps_s": "eps·S",
+    "error_ulps": "ulps of d*",
+}
+
+#: Readable names of the failure reasons.
+REASONS = {
+    "NAN": "NaN",
+    "INF": "inf",
+    "EXCEPTION": "exception",
+    "NAN_INPUT": "NaN input",
+    "NO_RESULT": "no result",
+    "SENTINEL": "sentinel",
+    "FALSE_TOUCHING": "false touching",
+    "POINT_OFF_SHAPE": "point off shape",
+    "INCONSISTENT": "inconsistent",
+}
+
+
+@dataclass
+class Stats:
+    """Accuracy, failures and speed of one entity over one or more families.
+
+    Attributes
+    ----------
+    n : int
+        Queries asked.
+    answered : int
+        Queries with an answer.
+    failures : dict of str to int
+        Queries without an answer, by reason.
+    beyond : int
+        Answered queries beyond the entity's bound (``8 eps S`` for
+        proximity's methods, the documented tolerance for backends).
+    worst, median : dict of str to float
+        By unit (``error_eps_s``, ``error_ulps``), over the answered queries;
+        NaN when none was answered.
+    qps : float
+        Queries per second: the median over families of each family's
+        median timed repeat; NaN if never timed.
+    failing_families : list of str
+        Families where at least one query failed.
+    """
+
+    n: int = 0
+    answered: int = 0
+    failures: dict = field(default_factory=dict)
+    beyond: int = 0
+    worst: dict = field(default_factory=dict)
+    median: dict = field(default_factory=dict)
+    qps: float = math.nan
+    failing_families: list = field(default_factory=list)
+
+    @property
+    def failed(self):
+        """Number of queries without an answer."""
+        return self.n - self.answered
+
+
+def answered_errors(record, unit):
+    """Errors of the answered rows of one record, as floats (inf where stored as None)."""
+    failed = {i for rows in record["failed"].values() for i in rows}
+    return np.array(
+        [math.inf if e is None else e for i, e in enumerate(record[unit]) if i not in failed],
+        dtype=np.float64,
+    )
+
+
+def stats(records, labels=None):
+    """Pool the records of one entity (one per family) into :class:`Stats`."""
+    labels = labels or [""] * len(records)
+    out = Stats()
+    pooled = {unit: [] for unit in UNITS}
+    speeds = []
+    for label, record in zip(labels, records, strict=True):
+        n = len(record["error_eps_s"])
+        out.n += n
+        out.answered += record["answered"]
+        out.beyond += record["beyond_bound"]
+        for reason, rows in record["failed"].items():
+            out.failures[reason] = out.failures.get(reason, 0) + len(rows)
+        if record["answered"] < n:
+            out.failing_families.append(label)
+        for unit in UNITS:
+            pooled[unit].append(answered_errors(record, unit))
+        if record.get("timing"):
+            speeds.append(record["timing"]["qps"])
+    for unit in UNITS:
+        errors = np.concatenate(pooled[unit]) if pooled[unit] else np.array([])
+        out.worst[unit] = float(errors.max()) if len(errors) else math.nan
+        out.median[unit] = float(np.median(errors)) if len(errors) else math.nan
+    out.qps = float(np.median(speeds)) if speeds else math.nan
+    return out
+
+
+def entities(raw, kind):
+    """``[(name, "method" | "backend")]`` measured for a query type, in run order."""
+    return [tuple(e) for e in raw["meta"]["entities"][kind]]
+
+
+def families(raw, kind):
+    """The family records of one query type, in registry order."""
+    return [f for f in raw["families"] if f["kind"] == kind]
+
+
+def by_kind(raw, kind):
+    """``{entity: Stats}`` pooled over every family of a query type."""
+    records = families(raw, kind)
+    labels = [f["family"] for f in records]
+    return {
+        name: stats([f["results"][name] for f in records], labels)
+        for name, _ in entities(raw, kind)
+        if all(name in f["results"] for f in records)
+    }
+
+
+def by_family(raw, kind):
+    """``[(family record, {entity: Stats})]`` for a query type."""
+    return [
+        (f, {name: stats([record], [f["family"]]) for name, record in f["results"].items()})
+        for f in families(raw, kind)
+    ]
+
+
+def sweeps(raw, kind):
+    """Families of a query type grouped by generator: ``{name: [family record, ...]}``.
+
+    Only generators with more than one member are sweeps; their members are
+    in the registry's order.
+    """
+    groups = {}
+    for f in families(raw, kind):
+        groups.setdefault(f["name"], []).append(f)
+    return {name: members for name, members in groups.items() if len(members) > 1}
+
+
+def pareto(points):
+    """Indices of the points ``(speed, error)`` no other point beats on both.
+
+    A point is dominated when another is at least as fast and at least as
+    accurate, and strictly better in one.  Points with a non-finite
+    coordinate are left out.
+    """
+    finite = [i for i, (x, y) in enumerate(points) if math.isfinite(x) and math.isfinite(y)]
+    front = []
+    for i in finite:
+        xi, yi = points[i]
+        dominated = any(
+            points[j][0] >= xi and points[j][1] <= yi and (points[j][0] > xi or points[j][1] < yi)
+            for j in finite
+        )
+        if not dominated:
+            front.append(i)
+    return sorted(front, key=lambda i: points[i][0])
+
+
+def failure_text(failures, n):
+    """``"12.5% (NaN 20, no result 5)"`` or ``""`` when nothing failed."""
+    total = sum(failures.values())
+    if not total:
+        return ""
+    reasons = ", ".join(
+        f"{REASONS.get(reason, reason)} {count}" for reason, count in sorted(failures.items()) if count
+    )
+    return f"{100.0 * total / n:.3g}% ({reasons})"
