@@ -473,22 +473,9 @@ def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
         return CERTAIN, 0.0, 0.0, cx, cy, cz, FACE if is_disk else RIM, not is_disk, 0.0, 0.0
     if m < SAFE_MIN or m > SAFE_MAX:
         f1, f2 = pow2_scale(m)
-        ok = True
-        dxh, o = _scale_exact(dxh, f1, f2)
-        ok &= o
-        dxl, o = _scale_exact(dxl, f1, f2)
-        ok &= o
-        dyh, o = _scale_exact(dyh, f1, f2)
-        ok &= o
-        dyl, o = _scale_exact(dyl, f1, f2)
-        ok &= o
-        dzh, o = _scale_exact(dzh, f1, f2)
-        ok &= o
-        dzl, o = _scale_exact(dzl, f1, f2)
-        ok &= o
-        r, o = _scale_exact(r, f1, f2)
-        ok &= o
-        if not ok:
+        (dxh, dxl, dyh, dyl, dzh, dzl), o1 = _scale_vec((dxh, dxl, dyh, dyl, dzh, dzl), f1, f2)
+        r, o2 = _scale_exact(r, f1, f2)
+        if not (o1 and o2):
             return fail
         g1 = 1.0 / f1
         g2 = 1.0 / f2
