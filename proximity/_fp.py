@@ -97,3 +97,9 @@ def pow2_scale(m):
     e = math.frexp(m)[1]
     half = (-e) // 2
     return math.ldexp(1.0, half), math.ldexp(1.0, -e - half)
+
+
+@njit(inline="always", error_model="numpy")
+def edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
+    # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.
+    return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)

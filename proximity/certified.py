@@ -42,7 +42,7 @@ from numba import literal_unroll, njit
 
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
-from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, fma, pow2_scale
+from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
 
@@ -299,9 +299,9 @@ def triangle_local(a, b, c, e0, e1, e2):
     fh, fl, df = _ratio(th2, tl2, dt2, gh, gl, dg)
     fx, fy, fz = cross_accurate(e0[0], e0[2], e0[4], e1[0], e1[2], e1[4])
     q = dot3_accurate(fx, fy, fz, a[0], a[2], a[4]) / max(fx * fx + fy * fy + fz * fz, 5e-324)
-    wc = max(_edge_fn(fx, fy, fz, a[0], a[2], a[4], e0[0], e0[2], e0[4]), 0.0)
-    wa = max(_edge_fn(fx, fy, fz, b[0], b[2], b[4], e2[0], e2[2], e2[4]), 0.0)
-    wb = max(-_edge_fn(fx, fy, fz, c[0], c[2], c[4], e1[0], e1[2], e1[4]), 0.0)
+    wc = max(edge_function(fx, fy, fz, a[0], a[2], a[4], e0[0], e0[2], e0[4]), 0.0)
+    wa = max(edge_function(fx, fy, fz, b[0], b[2], b[4], e2[0], e2[2], e2[4]), 0.0)
+    wb = max(-edge_function(fx, fy, fz, c[0], c[2], c[4], e1[0], e1[2], e1[4]), 0.0)
     w = max(wa + wb + wc, 5e-324)
 
     vertex = (feature >= VERTEX0) & (feature <= VERTEX2)
@@ -443,11 +443,6 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
         triangle_local(a, b, c, e0, e1, e2), g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz
     )
     return r if r[0] == CERTAIN else fail
-
-
-@njit(inline="always", error_model="numpy")
-def _edge_fn(nx, ny, nz, vx, vy, vz, ex, ey, ez):
-    return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)
 
 
 @njit(cache=True, error_model="numpy")

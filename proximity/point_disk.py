@@ -149,6 +149,8 @@ def _robust_block(a, r, is_disk):
         z[15, q], z[16, q], z[17, q], z[18, q] = res[5], res[6], res[7], res[8]
         z[19, q] = ok
     r[:] = z[10:]
+
+
 _SIGNATURE = types.void(
     types.int64,
     types.boolean,

@@ -57,7 +57,7 @@ from numba import njit, prange
 from numba.core import types
 
 from . import _exact, certified
-from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, pow2_scale
+from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
 from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
@@ -301,12 +301,6 @@ def _segment(ax, ay, az, ex, ey, ez, bx, by, bz):
 
 
 @njit(inline="always", error_model="numpy")
-def _edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
-    # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.
-    return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)
-
-
-@njit(inline="always", error_model="numpy")
 def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     """The robust minimisation on vertices relative to ``P``, in the safe window.
 
@@ -323,9 +317,9 @@ def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     # positive, which needs a non-zero normal.
     nx, ny, nz = cross_accurate(e0x, e0y, e0z, e1x, e1y, e1z)
     nn = nx * nx + ny * ny + nz * nz
-    wc = _edge_function(nx, ny, nz, ax, ay, az, e0x, e0y, e0z)
-    wa = _edge_function(nx, ny, nz, bx, by, bz, e2x, e2y, e2z)
-    wb = -_edge_function(nx, ny, nz, cx, cy, cz, e1x, e1y, e1z)
+    wc = edge_function(nx, ny, nz, ax, ay, az, e0x, e0y, e0z)
+    wa = edge_function(nx, ny, nz, bx, by, bz, e2x, e2y, e2z)
+    wb = -edge_function(nx, ny, nz, cx, cy, cz, e1x, e1y, e1z)
     inside = (wa > 0.0) & (wb > 0.0) & (wc > 0.0)
     na = dot3_accurate(nx, ny, nz, ax, ay, az)
     nn_safe = max(nn, TINY)
