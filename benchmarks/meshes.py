@@ -52,6 +52,7 @@ import numpy as np
 
 import proximity
 from benchmarks import accuracy
+from benchmarks.suite import timed
 from tests import exact
 
 EPS = 2.0**-52
@@ -183,19 +184,10 @@ def reference(vertices, faces, points):
 # -- timing ------------------------------------------------------------------------------
 
 
-def _timed(call, n, repeats):
-    seconds = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        seconds.append(time.perf_counter() - start)
-    return {"n": int(n), "repeats": int(repeats), "seconds": seconds, "qps": n / float(np.median(seconds))}
-
-
 def time_proximity(mesh, points, method="robust", repeats=5):
     """Median of ``repeats`` calls of ``closest_point`` on all the points, after a warm-up call."""
     mesh.closest_point(points, method=method)
-    return _timed(lambda: mesh.closest_point(points, method=method), len(points), repeats)
+    return timed(lambda: mesh.closest_point(points, method=method), len(points), repeats)
 
 
 def time_trimesh(vertices, faces, points):
@@ -204,7 +196,7 @@ def time_trimesh(vertices, faces, points):
 
     tm = trimesh.Trimesh(vertices, faces, process=False)
     trimesh.proximity.closest_point(tm, points[:10])  # builds and caches the r-tree
-    return _timed(lambda: trimesh.proximity.closest_point(tm, points), len(points), 1)
+    return timed(lambda: trimesh.proximity.closest_point(tm, points), len(points), 1)
 
 
 def time_fcl(vertices, faces, points):
@@ -224,7 +216,7 @@ def time_fcl(vertices, faces, points):
             probe.setTranslation(p)
             fcl.distance(mesh, probe, request, fcl.DistanceResult())
 
-    return _timed(run, len(points), 1)
+    return timed(run, len(points), 1)
 
 
 class _threads:
@@ -620,7 +612,7 @@ def crossover(seed=0, sizes=(4, 8, 12, 16, 24, 32, 48, 64, 128, 256), n_points=1
             for phase in ("brute", "bvh"):
                 mesh = proximity.TriangleMesh(vertices, faces, broad_phase=phase)
                 mesh.distance(points)
-                timing = _timed(lambda m=mesh, p=points: m.distance(p), n_points, repeats)
+                timing = timed(lambda m=mesh, p=points: m.distance(p), n_points, repeats)
                 row[phase] = float(np.min(timing["seconds"]))
             out["n"].append(n)
             out["brute"].append(row["brute"])

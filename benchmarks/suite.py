@@ -303,7 +303,7 @@ def serial_numba():
         numba.set_num_threads(threads)
 
 
-def _time(call, n, repeats):
+def timed(call, n, repeats):
     """``{"n", "repeats", "seconds", "qps"}``: the median of ``repeats`` timed calls."""
     seconds = []
     for _ in range(repeats):
@@ -340,7 +340,7 @@ def _calibrated(make_call, start, cap, target, repeats):
         if elapsed >= target or n >= cap:
             break
         n = min(cap, n * int(np.clip(target / max(elapsed, 1e-9), 2, 16)))
-    return _time(call, n, repeats)
+    return timed(call, n, repeats)
 
 
 def _method_timing(kind, scene, method, config):
@@ -474,7 +474,7 @@ def _tessellation(backends, config, bar):
                     )
                     part = _head(scene, n)
                     part_shape = accuracy.shape_of(kind, part)
-                    timing = _time(
+                    timing = timed(
                         lambda b=backend, s=part_shape, p=part.points, t=tol: b.closest_point(s, p, tol=t),
                         n,
                         max(3, config.repeats - 2),
