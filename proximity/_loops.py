@@ -11,6 +11,7 @@ for; anything else is copied to contiguous memory first.
 """
 
 import numpy as np
+from numba import njit
 from numba.core import types
 from numpy.lib.stride_tricks import as_strided
 
@@ -69,3 +70,14 @@ def loop_views(out_shape, inputs):
         for v, si, sj in zip(full, s_i, s_j, strict=True)
     ]
     return views, n_j
+
+
+@njit(inline="always")
+def copy_rows(dst, first_dst, src, first_src, rows):
+    """``dst[first_dst:][:rows] = src[first_src:][:rows]`` for 2D arrays of
+    equal width, written as plain loops: numba compiles a slice assignment
+    to a generic broadcasting loop, which costs more per block than the
+    queries in it."""
+    for k in range(rows):
+        for q in range(dst.shape[1]):
+            dst[first_dst + k, q] = src[first_src + k, q]

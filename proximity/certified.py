@@ -43,6 +43,7 @@ from numba import literal_unroll, njit
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
+from ._loops import copy_rows
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
 
@@ -381,7 +382,7 @@ def triangle_block(a, r):
     vectorises.
     """
     z = np.empty((22, BLOCK))
-    z[:12] = a
+    copy_rows(z, 0, a, 0, 12)
     for q in range(BLOCK):
         v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
         v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
@@ -405,7 +406,7 @@ def triangle_block(a, r):
         z[12, q], z[13, q], z[14, q], z[15, q], z[16, q] = res[1], res[2], res[3], res[4], res[5]
         z[17, q], z[18, q], z[19, q], z[20, q] = res[6], res[7], res[8], res[9]
         z[21, q] = ok & (res[0] == CERTAIN)
-    r[:] = z[12:]
+    copy_rows(r, 0, z, 12, 10)
 
 
 @njit(cache=True, error_model="numpy")

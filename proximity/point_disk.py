@@ -18,7 +18,7 @@ from numba import njit, prange
 from numba.core import types
 
 from . import _exact, certified
-from ._loops import A_IN2, A_IN3, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
+from ._loops import A_IN2, A_IN3, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, copy_rows, loop_views
 from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
 from .results import Feature
 
@@ -135,7 +135,7 @@ def _robust_block(a, r, is_disk):
     local scratch of constant length, so that it vectorises.
     """
     z = np.empty((20, BLOCK))
-    z[:10] = a
+    copy_rows(z, 0, a, 0, 10)
     for q in range(BLOCK):
         cx, cy, cz, ux, uy, uz = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
         dx, dy, dz, radius = z[6, q] - cx, z[7, q] - cy, z[8, q] - cz, z[9, q]
@@ -148,7 +148,7 @@ def _robust_block(a, r, is_disk):
         z[10, q], z[11, q], z[12, q], z[13, q], z[14, q] = res[0], res[1], res[2], res[3], res[4]
         z[15, q], z[16, q], z[17, q], z[18, q] = res[5], res[6], res[7], res[8]
         z[19, q] = ok
-    r[:] = z[10:]
+    copy_rows(r, 0, z, 10, 10)
 
 
 _SIGNATURE = types.void(

@@ -58,7 +58,7 @@ from numba.core import types
 
 from . import _exact, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
-from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, loop_views
+from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, copy_rows, loop_views
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
 TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
@@ -476,7 +476,7 @@ def _robust_block(a, r):
     which can then prove inputs and outputs independent and vectorise.
     """
     z = np.empty((22, BLOCK))
-    z[:12] = a
+    copy_rows(z, 0, a, 0, 12)
     for q in range(BLOCK):
         px, py, pz = z[9, q], z[10, q], z[11, q]
         ax, ay, az = z[0, q] - px, z[1, q] - py, z[2, q] - pz
@@ -489,14 +489,14 @@ def _robust_block(a, r):
         )  # fmt: skip
         z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
         z[21, q] = ok
-    r[:] = z[12:]
+    copy_rows(r, 0, z, 12, 10)
 
 
 @njit(cache=True, error_model="numpy")
 def _eberly_block(a, r):
     """:func:`_robust_block` for the seed's method; ``r[9]`` flags finite points."""
     z = np.empty((22, BLOCK))
-    z[:12] = a
+    copy_rows(z, 0, a, 0, 12)
     for q in range(BLOCK):
         res = _eberly_query(
             z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
@@ -504,7 +504,7 @@ def _eberly_block(a, r):
         )  # fmt: skip
         z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
         z[21, q] = math.isfinite(z[9, q]) & math.isfinite(z[10, q]) & math.isfinite(z[11, q])
-    r[:] = z[12:]
+    copy_rows(r, 0, z, 12, 10)
 
 
 _SIGNATURE = types.void(
