@@ -32,7 +32,7 @@ class Feature(enum.IntEnum):
     RIM = 7
 
 
-_FEATURES = list(Feature)  # indexed by code + 1
+_FEATURES = {float(f): f for f in Feature}  # by code, as the kernels write it in a row
 
 # Plain integer codes, for the compiled kernels (which compare ints).
 NONE = int(Feature.NONE)
@@ -83,21 +83,6 @@ class Result:
                 value = Feature(int(value))
             object.__setattr__(self, name, value)
 
-    @classmethod
-    def _from_row(cls, row):
-        """The result of one query from the fast path's nine values.
-
-        ``row`` is a read-only float64 array: ``(distance, sqr_distance, x, y,
-        z, feature)`` and three shape-specific values.  Building the instance
-        directly skips the per-field conversions, which would cost more than
-        the query itself.
-        """
-        result = object.__new__(cls)
-        result.__dict__.update(
-            distance=row[0], sqr_distance=row[1], point=row[2:5], feature=_FEATURES[int(row[5]) + 1]
-        )
-        return result
-
     def __getitem__(self, index):
         """The results of the queries at ``index`` of the batch.
 
@@ -130,18 +115,6 @@ class TriangleResult(Result):
 
     barycentric: np.ndarray
 
-    @classmethod
-    def _from_row(cls, row):
-        result = object.__new__(cls)
-        result.__dict__.update(
-            distance=row[0],
-            sqr_distance=row[1],
-            point=row[2:5],
-            feature=_FEATURES[int(row[5]) + 1],
-            barycentric=row[6:9],
-        )
-        return result
-
 
 @dataclass(frozen=True)
 class DiskResult(Result):
@@ -158,22 +131,6 @@ class DiskResult(Result):
 
     height: np.ndarray
     radial: np.ndarray
-
-    @classmethod
-    def _from_row(cls, row):
-        result = object.__new__(cls)
-        result.__dict__.update(
-            distance=row[0],
-            sqr_distance=row[1],
-            point=row[2:5],
-            feature=_FEATURES[int(row[5]) + 1],
-            height=row[7],
-            radial=row[8],
-            equidistant=row[6] != 0.0,
-        )
-        if cls is DiskResult:
-            del result.__dict__["equidistant"]
-        return result
 
 
 @dataclass(frozen=True)
@@ -237,3 +194,53 @@ class SceneResult(Result):
     height: np.ndarray
     radial: np.ndarray
     equidistant: np.ndarray
+
+
+# One query's result from the nine values the fast path's kernels write in a
+# read-only row: ``(distance, sqr_distance, x, y, z, feature)`` and three
+# shape-specific values.  The instance is filled in directly, without the
+# per-field conversions of ``__init__``, which would cost more than the query
+# itself; the fields are NumPy scalars and views of the row, as ``__init__``
+# makes them.
+_new = object.__new__
+_POINT = slice(2, 5)
+_LAST3 = slice(6, 9)
+
+
+def triangle_from_row(row):
+    """:class:`TriangleResult` of one fast-path query."""
+    result = _new(TriangleResult)
+    fields = result.__dict__
+    fields["distance"] = row[0]
+    fields["sqr_distance"] = row[1]
+    fields["point"] = row[_POINT]
+    fields["feature"] = _FEATURES[row.item(5)]
+    fields["barycentric"] = row[_LAST3]
+    return result
+
+
+def disk_from_row(row):
+    """:class:`DiskResult` of one fast-path query."""
+    result = _new(DiskResult)
+    fields = result.__dict__
+    fields["distance"] = row[0]
+    fields["sqr_distance"] = row[1]
+    fields["point"] = row[_POINT]
+    fields["feature"] = _FEATURES[row.item(5)]
+    fields["height"] = row[7]
+    fields["radial"] = row[8]
+    return result
+
+
+def circle_from_row(row):
+    """:class:`CircleResult` of one fast-path query."""
+    result = _new(CircleResult)
+    fields = result.__dict__
+    fields["distance"] = row[0]
+    fields["sqr_distance"] = row[1]
+    fields["point"] = row[_POINT]
+    fields["feature"] = _FEATURES[row.item(5)]
+    fields["height"] = row[7]
+    fields["radial"] = row[8]
+    fields["equidistant"] = row[6] != 0.0
+    return result
