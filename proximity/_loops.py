@@ -72,12 +72,134 @@ def loop_views(out_shape, inputs):
     return views, n_j
 
 
+# Batch kernels work in blocks of this many queries: gathered from the
+# broadcast inputs into local structure-of-arrays scratch, computed by a loop
+# over the scratch that compiles to SIMD code, and scattered to the outputs.
+# The compute loop vectorises only when it runs over scratch allocated in the
+# same function, with this constant length, so every kernel's block function
+# allocates its own and gathers into it with the helpers below.  They are
+# written as plain loops over one run of the inner loop dimension at a time,
+# which the compiler turns into straight strided loads and stores: slice
+# assignments and per-element wrap-around tests cost more than the queries.
+BLOCK = 128
+
+
 @njit(inline="always")
-def copy_rows(dst, first_dst, src, first_src, rows):
-    """``dst[first_dst:][:rows] = src[first_src:][:rows]`` for 2D arrays of
-    equal width, written as plain loops: numba compiles a slice assignment
-    to a generic broadcasting loop, which costs more per block than the
-    queries in it."""
-    for k in range(rows):
-        for q in range(dst.shape[1]):
-            dst[first_dst + k, q] = src[first_src + k, q]
+def _zero_tail(z, rows, nb):
+    # The columns past the last query of a short block are computed too.
+    for row in range(rows):
+        for q in range(nb, BLOCK):
+            z[row, q] = 0.0
+
+
+@njit(inline="always")
+def gather_triangles(z, V, P, n_j, k0, nb):
+    """Rows 0-11 of ``z``: the vertices ``V0, V1, V2`` and the point of
+    queries ``k0 .. k0 + nb`` of an ``(I, J)`` loop, one query per column."""
+    i = k0 // n_j
+    j = k0 - i * n_j
+    q = 0
+    while q < nb:
+        run = min(nb - q, n_j - j)
+        Vi = V[i]
+        Pi = P[i]
+        for t in range(run):
+            z[0, q + t] = Vi[j + t, 0, 0]
+            z[1, q + t] = Vi[j + t, 0, 1]
+            z[2, q + t] = Vi[j + t, 0, 2]
+            z[3, q + t] = Vi[j + t, 1, 0]
+            z[4, q + t] = Vi[j + t, 1, 1]
+            z[5, q + t] = Vi[j + t, 1, 2]
+            z[6, q + t] = Vi[j + t, 2, 0]
+            z[7, q + t] = Vi[j + t, 2, 1]
+            z[8, q + t] = Vi[j + t, 2, 2]
+            z[9, q + t] = Pi[j + t, 0]
+            z[10, q + t] = Pi[j + t, 1]
+            z[11, q + t] = Pi[j + t, 2]
+        q += run
+        i += 1
+        j = 0
+    _zero_tail(z, 12, nb)
+
+
+@njit(inline="always")
+def gather_round(z, C, U, P, R, n_j, k0, nb):
+    """Rows 0-9 of ``z``: center, unit normal, point and radius of queries
+    ``k0 .. k0 + nb``, as :func:`gather_triangles`."""
+    i = k0 // n_j
+    j = k0 - i * n_j
+    q = 0
+    while q < nb:
+        run = min(nb - q, n_j - j)
+        Ci = C[i]
+        Ui = U[i]
+        Pi = P[i]
+        Ri = R[i]
+        for t in range(run):
+            z[0, q + t] = Ci[j + t, 0]
+            z[1, q + t] = Ci[j + t, 1]
+            z[2, q + t] = Ci[j + t, 2]
+            z[3, q + t] = Ui[j + t, 0]
+            z[4, q + t] = Ui[j + t, 1]
+            z[5, q + t] = Ui[j + t, 2]
+            z[6, q + t] = Pi[j + t, 0]
+            z[7, q + t] = Pi[j + t, 1]
+            z[8, q + t] = Pi[j + t, 2]
+            z[9, q + t] = Ri[j + t]
+        q += run
+        i += 1
+        j = 0
+    _zero_tail(z, 10, nb)
+
+
+@njit(inline="always")
+def store(z, first, q, res):
+    """Column ``q`` of rows ``first .. first + 8`` of ``z``: one query's nine results."""
+    z[first, q], z[first + 1, q], z[first + 2, q] = res[0], res[1], res[2]
+    z[first + 3, q], z[first + 4, q], z[first + 5, q] = res[3], res[4], res[5]
+    z[first + 6, q], z[first + 7, q], z[first + 8, q] = res[6], res[7], res[8]
+
+
+@njit(inline="always")
+def scatter_common(z, first, k0, nb, dist, sqr, point, feature, full):
+    """Distance (always) and, with ``full``, squared distance, point and
+    feature of queries ``k0 .. k0 + nb`` from rows ``first .. first + 5``."""
+    d = dist[k0 : k0 + nb]
+    for q in range(nb):
+        d[q] = z[first, q]
+    if full:
+        s = sqr[k0 : k0 + nb]
+        p = point[k0 : k0 + nb]
+        f = feature[k0 : k0 + nb]
+        for q in range(nb):
+            s[q] = z[first + 1, q]
+            p[q, 0] = z[first + 2, q]
+            p[q, 1] = z[first + 3, q]
+            p[q, 2] = z[first + 4, q]
+            f[q] = np.int8(z[first + 5, q])
+
+
+@njit(inline="always")
+def scatter_triangles(z, first, k0, nb, dist, sqr, point, feature, bary, full):
+    """:func:`scatter_common`, and the barycentrics from rows ``first + 6 ..``."""
+    scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)
+    if full:
+        b = bary[k0 : k0 + nb]
+        for q in range(nb):
+            b[q, 0] = z[first + 6, q]
+            b[q, 1] = z[first + 7, q]
+            b[q, 2] = z[first + 8, q]
+
+
+@njit(inline="always")
+def scatter_round(z, first, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full):
+    """:func:`scatter_common`, and equidistant, height and radial from rows ``first + 6 ..``."""
+    scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)
+    if full:
+        e = equidistant[k0 : k0 + nb]
+        h = height[k0 : k0 + nb]
+        r = radial[k0 : k0 + nb]
+        for q in range(nb):
+            e[q] = z[first + 6, q] != 0.0
+            h[q] = z[first + 7, q]
+            r[q] = z[first + 8, q]

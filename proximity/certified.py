@@ -43,7 +43,7 @@ from numba import literal_unroll, njit
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
-from ._loops import copy_rows
+from ._loops import BLOCK, gather_triangles, scatter_triangles, store
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
 
@@ -367,46 +367,42 @@ def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
 
 
-BLOCK = 128  # the length of the blocks point_triangle gathers
-
-
 @njit(cache=True, error_model="numpy")
-def triangle_block(a, r):
-    """Certified queries of a block gathered in structure-of-arrays form.
+def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+    """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
 
-    ``a`` holds the nine vertex coordinates and the point in its rows, one
-    query per column; ``r[:9]`` receives the results and ``r[9]`` whether
-    the query was certified here (the others take the scalar path: outside
-    the safe window, or undecided).  As ``point_triangle._robust_block``,
-    the loop runs over local scratch of constant length so that it
-    vectorises.
+    As ``point_triangle._robust_block``: gathered into local scratch,
+    filtered by a loop that compiles to SIMD code, and redone one by one by
+    :func:`triangle` where that loop could not certify them (outside the
+    safe window, or undecided); ``exact`` flags the rows that even
+    :func:`triangle` left to the exact fallback.
     """
     z = np.empty((22, BLOCK))
-    copy_rows(z, 0, a, 0, 12)
+    gather_triangles(z, V, P, n_j, k0, nb)
     for q in range(BLOCK):
         v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
         v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
         ea, eb, ec, e0, e1, e2, _, ok = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
         res = finish(
             triangle_local(ea, eb, ec, e0, e1, e2),
-            1.0,
-            v0x,
-            v0y,
-            v0z,
-            v1x,
-            v1y,
-            v1z,
-            v2x,
-            v2y,
-            v2z,
-            px,
-            py,
-            pz,
-        )
-        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q] = res[1], res[2], res[3], res[4], res[5]
-        z[17, q], z[18, q], z[19, q], z[20, q] = res[6], res[7], res[8], res[9]
+            1.0, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
+        )  # fmt: skip
+        store(z, 12, q, res[1:])
         z[21, q] = ok & (res[0] == CERTAIN)
-    copy_rows(r, 0, z, 12, 10)
+    for q in range(nb):
+        if z[21, q] != 0.0:
+            continue
+        px, py, pz = z[9, q], z[10, q], z[11, q]
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            res = triangle(
+                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
+            )
+            exact[k0 + q] = res[0] != CERTAIN
+            store(z, 12, q, res[1:])
+        else:
+            nan = math.nan
+            store(z, 12, q, (nan, nan, nan, nan, nan, NONE, nan, nan, nan))
+    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,7 +18,19 @@ from numba import njit, prange
 from numba.core import types
 
 from . import _exact, certified
-from ._loops import A_IN2, A_IN3, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, copy_rows, loop_views
+from ._loops import (
+    A_IN2,
+    A_IN3,
+    BLOCK,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT_FLAG,
+    gather_round,
+    loop_views,
+    scatter_round,
+    store,
+)
 from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
 from .results import Feature
 
@@ -118,37 +130,67 @@ def exact_row(row, args, point):
     row[9] = 0.0
 
 
-@njit(inline="always")
-def _store(r, q, res):
-    r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
-
-
-BLOCK = 128  # queries gathered into structure-of-arrays form at a time
-
-
 @njit(cache=True, error_model="numpy")
-def _robust_block(a, r, is_disk):
-    """Robust queries of a gathered block: rows of ``a`` are the center, the
-    unit normal, the point and the radius, one query per column; ``r[:9]``
-    receives the results and ``r[9]`` whether the query was in the safe
-    window (the others are redone on the scalar path).  The loop runs over
-    local scratch of constant length, so that it vectorises.
+def _block(
+    method,
+    is_disk,
+    C,
+    U,
+    N,
+    R,
+    P,
+    n_j,
+    k0,
+    nb,
+    dist,
+    sqr,
+    point,
+    feature,
+    equidistant,
+    height,
+    radial,
+    exact,
+    full,
+):
+    """Queries ``k0 .. k0 + nb`` of :func:`_batch`.
+
+    Gathered into local scratch (rows 0-9 of ``z``: center, unit normal,
+    point, radius); for ``robust``, computed by a loop that compiles to SIMD
+    code (rows 10-18, and in row 19 whether the query was in its safe
+    window); every other row is done one by one on the scalar path, which
+    is the only path of the other methods.  Then scattered to the outputs.
     """
     z = np.empty((20, BLOCK))
-    copy_rows(z, 0, a, 0, 10)
-    for q in range(BLOCK):
-        cx, cy, cz, ux, uy, uz = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
-        dx, dy, dz, radius = z[6, q] - cx, z[7, q] - cy, z[8, q] - cz, z[9, q]
-        _, ok = window(dx, dy, dz, radius)
-        h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-        res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-        d, s, x, y, z_ = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-        if not is_disk:
-            res = (d, s, x, y, z_, RIM, on_axis, h, qq)
-        z[10, q], z[11, q], z[12, q], z[13, q], z[14, q] = res[0], res[1], res[2], res[3], res[4]
-        z[15, q], z[16, q], z[17, q], z[18, q] = res[5], res[6], res[7], res[8]
-        z[19, q] = ok
-    copy_rows(r, 0, z, 10, 10)
+    gather_round(z, C, U, P, R, n_j, k0, nb)
+    if method == ROBUST:
+        for q in range(BLOCK):
+            cx, cy, cz, ux, uy, uz = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
+            dx, dy, dz, radius = z[6, q] - cx, z[7, q] - cy, z[8, q] - cz, z[9, q]
+            _, ok = window(dx, dy, dz, radius)
+            h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+            res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+            d, s, x, y, z_ = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+            if not is_disk:
+                res = (d, s, x, y, z_, RIM, on_axis, h, qq)
+            store(z, 10, q, res)
+            z[19, q] = ok
+    else:
+        for q in range(nb):
+            z[19, q] = 0.0
+    for q in range(nb):
+        if z[19, q] != 0.0:
+            continue
+        k = k0 + q
+        i = k // n_j
+        j = k - i * n_j
+        cert = _any_query(
+            method, is_disk, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
+            N[i, j, 0], N[i, j, 1], N[i, j, 2], z[9, q], z[6, q], z[7, q], z[8, q],
+        )  # fmt: skip
+        if method == CERTIFIED:
+            exact[k] = cert[0] != certified.CERTAIN
+        store(z, 10, q, cert[1:])
+    scatter_round(z, 10, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
 _SIGNATURE = types.void(
@@ -180,72 +222,17 @@ def _batch(
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
     ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
-    only ``dist`` is written.  As for triangles, queries are gathered in
-    blocks so that the robust core runs as SIMD code, and rows outside its
-    safe window are redone on the scalar path.  The certified method runs on
-    that path for every row, and flags in ``exact`` the rows its filter
-    could not decide.
+    only ``dist`` is written.  Blocks of queries go to the threads, each
+    handled by :func:`_block`; the certified method flags in ``exact`` the
+    rows its filter could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
-        nb = min(BLOCK, n - k0)
-        a = np.zeros((10, BLOCK))  # zeros: the tail of the last block is computed too
-        r = np.empty((10, BLOCK))
-        i = k0 // n_j
-        j = k0 - i * n_j
-        for q in range(nb):
-            for c in range(3):
-                a[c, q] = C[i, j, c]
-                a[3 + c, q] = U[i, j, c]
-                a[6 + c, q] = P[i, j, c]
-            a[9, q] = R[i, j]
-            j += 1
-            if j == n_j:
-                i += 1
-                j = 0
-        if method == ROBUST:
-            _robust_block(a, r, is_disk)
-        else:
-            r[9, :nb] = 0.0
-        for q in range(nb):
-            if r[9, q] != 0.0:
-                continue
-            k = k0 + q
-            ii = k // n_j
-            jj = k - ii * n_j
-            cert = _any_query(
-                method,
-                is_disk,
-                a[0, q],
-                a[1, q],
-                a[2, q],
-                a[3, q],
-                a[4, q],
-                a[5, q],
-                N[ii, jj, 0],
-                N[ii, jj, 1],
-                N[ii, jj, 2],
-                a[9, q],
-                a[6, q],
-                a[7, q],
-                a[8, q],
-            )
-            if method == CERTIFIED:
-                exact[k] = cert[0] != certified.CERTAIN
-            _store(r, q, cert[1:])
-        for q in range(nb):
-            k = k0 + q
-            dist[k] = r[0, q]
-            if full:
-                sqr[k] = r[1, q]
-                point[k, 0] = r[2, q]
-                point[k, 1] = r[3, q]
-                point[k, 2] = r[4, q]
-                feature[k] = np.int8(r[5, q])
-                equidistant[k] = r[6, q] != 0.0
-                height[k] = r[7, q]
-                radial[k] = r[8, q]
+        _block(
+            method, is_disk, C, U, N, R, P, n_j, k0, min(BLOCK, n - k0),
+            dist, sqr, point, feature, equidistant, height, radial, exact, full,
+        )  # fmt: skip
 
 
 def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):

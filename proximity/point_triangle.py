@@ -58,7 +58,19 @@ from numba.core import types
 
 from . import _exact, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
-from ._loops import A_IN3, A_IN4, OUT1, OUT2, OUT_FEATURE, OUT_FLAG, copy_rows, loop_views
+from ._loops import (
+    A_IN3,
+    A_IN4,
+    BLOCK,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT_FLAG,
+    gather_triangles,
+    loop_views,
+    scatter_triangles,
+    store,
+)
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
 TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
@@ -461,22 +473,20 @@ def exact_row(row, vertices, point):
     row[9] = 0.0
 
 
-BLOCK = 128  # queries gathered into structure-of-arrays form at a time
+_NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
 
 
 @njit(cache=True, error_model="numpy")
-def _robust_block(a, r):
-    """Robust queries of a gathered block: ``a`` holds the nine vertex
-    coordinates and the point in its rows, one query per column; ``r[:9]``
-    receives the results and ``r[9]`` whether the query was in the safe
-    window (the others are redone on the scalar path).
+def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+    """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
-    The loop runs over a scratch array allocated here, with a constant
-    length, so that its strides and trip count are known to the compiler,
-    which can then prove inputs and outputs independent and vectorise.
+    Gathered into local scratch (rows 0-11 of ``z``), computed by a loop that
+    compiles to SIMD code (rows 12-20, and in row 21 whether the query was in
+    the safe window), then redone one by one on the scalar path where it was
+    not, and scattered to the outputs.
     """
     z = np.empty((22, BLOCK))
-    copy_rows(z, 0, a, 0, 12)
+    gather_triangles(z, V, P, n_j, k0, nb)
     for q in range(BLOCK):
         px, py, pz = z[9, q], z[10, q], z[11, q]
         ax, ay, az = z[0, q] - px, z[1, q] - py, z[2, q] - pz
@@ -487,24 +497,39 @@ def _robust_block(a, r):
             _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
             1.0, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz,
         )  # fmt: skip
-        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
+        store(z, 12, q, res)
         z[21, q] = ok
-    copy_rows(r, 0, z, 12, 10)
+    for q in range(nb):
+        if z[21, q] != 0.0:
+            continue
+        px, py, pz = z[9, q], z[10, q], z[11, q]
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            res = robust(
+                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
+            )
+            store(z, 12, q, res)
+        else:
+            store(z, 12, q, _NAN_ROW)
+    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 @njit(cache=True, error_model="numpy")
-def _eberly_block(a, r):
-    """:func:`_robust_block` for the seed's method; ``r[9]`` flags finite points."""
+def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+    """:func:`_robust_block` for the seed's method: rows with a non-finite
+    point are the only ones it leaves, and get NaN."""
     z = np.empty((22, BLOCK))
-    copy_rows(z, 0, a, 0, 12)
+    gather_triangles(z, V, P, n_j, k0, nb)
     for q in range(BLOCK):
         res = _eberly_query(
             z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
             z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q],
         )  # fmt: skip
-        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q], z[17, q], z[18, q], z[19, q], z[20, q] = res
+        store(z, 12, q, res)
         z[21, q] = math.isfinite(z[9, q]) & math.isfinite(z[10, q]) & math.isfinite(z[11, q])
-    copy_rows(r, 0, z, 12, 10)
+    for q in range(nb):
+        if z[21, q] == 0.0:
+            store(z, 12, q, _NAN_ROW)
+    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 _SIGNATURE = types.void(
@@ -519,90 +544,21 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
     ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
     (zero along broadcast dimensions); output row ``k`` is loop index
     ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and the
-    other outputs may be empty.
-
-    Queries are processed in blocks: gathered into contiguous rows, computed
-    by a SIMD loop (:func:`_robust_block`, :func:`_eberly_block`,
-    :func:`certified.triangle_block`), then scattered.  Rows that loop
-    cannot take (differences outside the safe window, a non-finite point, a
-    certified query left undecided) are redone one by one on the scalar
-    path; the certified method flags in ``exact`` the rows that even that
-    could not decide.
+    other outputs may be empty.  Blocks of queries go to the threads, each
+    handled by its method's block function (:func:`_robust_block`,
+    :func:`_eberly_block`, :func:`certified.triangle_block`); the certified
+    method flags in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        a = np.zeros((12, BLOCK))  # zeros: the tail of the last block is computed too
-        r = np.empty((10, BLOCK))
-        i = k0 // n_j
-        j = k0 - i * n_j
-        for q in range(nb):
-            for c in range(3):
-                for v in range(3):
-                    a[3 * v + c, q] = V[i, j, v, c]
-                a[9 + c, q] = P[i, j, c]
-            j += 1
-            if j == n_j:
-                i += 1
-                j = 0
         if method == ROBUST:
-            _robust_block(a, r)
+            _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
         elif method == CERTIFIED:
-            certified.triangle_block(a, r)
+            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
         else:
-            _eberly_block(a, r)
-        for q in range(nb):
-            if r[9, q] != 0.0:
-                continue
-            px, py, pz = a[9, q], a[10, q], a[11, q]
-            if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-                res = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
-            elif method == CERTIFIED:
-                cert = certified.triangle(
-                    a[0, q],
-                    a[1, q],
-                    a[2, q],
-                    a[3, q],
-                    a[4, q],
-                    a[5, q],
-                    a[6, q],
-                    a[7, q],
-                    a[8, q],
-                    px,
-                    py,
-                    pz,
-                )
-                exact[k0 + q] = cert[0] != certified.CERTAIN
-                res = (cert[1], cert[2], cert[3], cert[4], cert[5], cert[6], cert[7], cert[8], cert[9])
-            else:
-                res = robust(
-                    a[0, q],
-                    a[1, q],
-                    a[2, q],
-                    a[3, q],
-                    a[4, q],
-                    a[5, q],
-                    a[6, q],
-                    a[7, q],
-                    a[8, q],
-                    px,
-                    py,
-                    pz,
-                )
-            r[0, q], r[1, q], r[2, q], r[3, q], r[4, q], r[5, q], r[6, q], r[7, q], r[8, q] = res
-        for q in range(nb):
-            k = k0 + q
-            dist[k] = r[0, q]
-            if full:
-                sqr[k] = r[1, q]
-                point[k, 0] = r[2, q]
-                point[k, 1] = r[3, q]
-                point[k, 2] = r[4, q]
-                feature[k] = np.int8(r[5, q])
-                bary[k, 0] = r[6, q]
-                bary[k, 1] = r[7, q]
-                bary[k, 2] = r[8, q]
+            _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 def query(method, vertices, points, out_shape, full):
