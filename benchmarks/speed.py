@@ -40,15 +40,27 @@ from benchmarks import scenes
 REPEATS = 5
 
 
-def median_time(fn, repeats=REPEATS):
-    """Median wall time of ``fn()`` over ``repeats`` runs, after one warm-up."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
+def median_times(fns, repeats=REPEATS):
+    """Median wall time of each function in ``fns`` (a dict), over
+    ``repeats`` consecutive calls after one warm-up call.
+
+    Each function's calls run back to back, so each is timed in the steady
+    state of repeating itself, as a program calling it in a loop would see
+    it.  Interleaving the calls of different functions would time each one
+    right after the other's large temporaries were freed, and fresh pages
+    are slow on this project's machine: a circle's distances took 15 ms
+    instead of 7 ms straight after the NumPy formula.
+    """
+    times = {}
+    for name, fn in fns.items():
         fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+        runs = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            fn()
+            runs.append(time.perf_counter() - start)
+        times[name] = float(np.median(runs))
+    return times
 
 
 def trimesh_pairs(vertices, points):
@@ -95,22 +107,22 @@ def triangle_rows(n, repeats):
         (f"{n:,} pairs", scene.vertices, proximity.Triangle(scene.vertices)),
         (f"{n:,} points, one triangle", one, proximity.Triangle(scene.vertices[0])),
     ):
-        theirs = median_time(lambda v=vertices: trimesh_pairs(v, scene.points), repeats)
-        timed = {}
-        for method, target in (("robust", 15.0), ("eberly", 25.0)):
+        fns = {"trimesh": lambda v=vertices: trimesh_pairs(v, scene.points)}
+        methods = ("robust", "eberly", "certified") if shape.batch_shape else ("robust", "eberly")
+        for method in methods:
             for call in ("closest_point", "distance"):
                 query = getattr(shape, call)
-                timed[method, call] = ours = median_time(
-                    lambda q=query, m=method: q(scene.points, method=m), repeats
-                )
-                rows.append(_row(f"{label}: {method} {call} vs trimesh + norm", ours, theirs, n, target))
+                fns[method, call] = lambda q=query, m=method: q(scene.points, method=m)
+        times = median_times(fns, repeats)
+        for method, target in (("robust", 15.0), ("eberly", 25.0)):
+            for call in ("closest_point", "distance"):
+                case = f"{label}: {method} {call} vs trimesh + norm"
+                rows.append(_row(case, times[method, call], times["trimesh"], n, target))
         if shape.batch_shape:
             # The certified method's throughput, as a fraction of robust's.
             for call in ("closest_point", "distance"):
-                query = getattr(shape, call)
-                ours = median_time(lambda q=query: q(scene.points, method="certified"), repeats)
-                row = _row(f"{label}: certified {call} vs robust", ours, timed["robust", call], n, 0.25)
-                rows.append(row)
+                ours, robust = times["certified", call], times["robust", call]
+                rows.append(_row(f"{label}: certified {call} vs robust", ours, robust, n, 0.25))
     return rows
 
 
@@ -121,15 +133,14 @@ def round_rows(n, repeats):
     center, normal, radius = scene.center[0], scene.normal[0], float(scene.radius[0])
     for kind, cls in (("disk", proximity.Disk), ("circle", proximity.Circle)):
         shape = cls(center, normal, radius)
-        theirs = median_time(
-            lambda d=(kind == "disk"): numpy_round(center, normal, radius, scene.points, d), repeats
-        )
+        fns = {"numpy": lambda d=(kind == "disk"): numpy_round(center, normal, radius, scene.points, d)}
         for call in ("distance", "closest_point"):
             query = getattr(shape, call)
-            ours = median_time(lambda q=query: q(scene.points), repeats)
-            rows.append(
-                _row(f"{n:,} points, one {kind}: robust {call} vs NumPy formula", ours, theirs, n, 10.0)
-            )
+            fns[call] = lambda q=query: q(scene.points)
+        times = median_times(fns, repeats)
+        for call in ("distance", "closest_point"):
+            case = f"{n:,} points, one {kind}: robust {call} vs NumPy formula"
+            rows.append(_row(case, times[call], times["numpy"], n, 10.0))
     return rows
 
 
@@ -158,8 +169,17 @@ def loop_row(n, repeats):
         for p in points:
             shape.closest_point(p)
 
-    theirs = median_time(with_fcl, repeats)
-    ours = median_time(with_proximity, repeats)
+    # Calls this short are at the mercy of a busy moment on a shared machine,
+    # so the two loops take turns, each timed many times.  (Unlike the batch
+    # rows, neither leaves large temporaries behind to slow the other.)
+    theirs, ours = [], []
+    with_fcl(), with_proximity()
+    for _ in range(3 * repeats):
+        for fn, times in ((with_fcl, theirs), (with_proximity, ours)):
+            start = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - start)
+    theirs, ours = float(np.median(theirs)), float(np.median(ours))
     return [
         _row(
             "one point, one prebuilt triangle, Python loop: closest_point vs fcl.distance",
