@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit, prange
 from numba.core import types
 
-from . import _exact, certified
+from . import _exact, _pool, certified
 from ._loops import (
     A_IN2,
     A_IN3,
@@ -243,13 +243,13 @@ def query(method, is_disk, center, unit_normal, normal, radius, points, out_shap
     n = C.shape[0] * C.shape[1]
     m = n if full else 0
     out = dict(
-        distance=np.empty(n),
-        sqr_distance=np.empty(m),
-        point=np.empty((m, 3)),
-        feature=np.empty(m, np.int8),
-        equidistant=np.empty(m, np.bool_),
-        height=np.empty(m),
-        radial=np.empty(m),
+        distance=_pool.empty(n),
+        sqr_distance=_pool.empty(m),
+        point=_pool.empty((m, 3)),
+        feature=_pool.empty(m, np.int8),
+        equidistant=_pool.empty(m, np.bool_),
+        height=_pool.empty(m),
+        radial=_pool.empty(m),
     )
     exact = np.zeros(n if method == "certified" else 0, np.bool_)
     _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, *out.values(), exact, full)

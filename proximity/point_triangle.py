@@ -56,7 +56,7 @@ import numpy as np
 from numba import njit, prange
 from numba.core import types
 
-from . import _exact, certified
+from . import _exact, _pool, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
 from ._loops import (
     A_IN3,
@@ -567,11 +567,11 @@ def query(method, vertices, points, out_shape, full):
     n = V.shape[0] * V.shape[1]
     m = n if full else 0
     out = dict(
-        distance=np.empty(n),
-        sqr_distance=np.empty(m),
-        point=np.empty((m, 3)),
-        feature=np.empty(m, np.int8),
-        barycentric=np.empty((m, 3)),
+        distance=_pool.empty(n),
+        sqr_distance=_pool.empty(m),
+        point=_pool.empty((m, 3)),
+        feature=_pool.empty(m, np.int8),
+        barycentric=_pool.empty((m, 3)),
     )
     exact = np.zeros(n if method == "certified" else 0, np.bool_)
     _batch(METHODS[method], V, P, n_j, *out.values(), exact, full)
