@@ -367,8 +367,26 @@ def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
 
 
+@njit(inline="always", error_model="numpy")
+def _redo_undecided(z, k0, nb, exact):
+    """Redo with :func:`triangle` the queries of a block that the filter left."""
+    for q in range(nb):
+        if z[21, q] != 0.0:
+            continue
+        px, py, pz = z[9, q], z[10, q], z[11, q]
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            res = triangle(
+                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
+            )
+            exact[k0 + q] = res[0] != CERTAIN
+            store(z, 12, q, res[1:])
+        else:
+            nan = math.nan
+            store(z, 12, q, (nan, nan, nan, nan, nan, NONE, nan, nan, nan))
+
+
 @njit(cache=True, error_model="numpy")
-def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact):
     """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
 
     As ``point_triangle._robust_block``: gathered into local scratch,
@@ -387,22 +405,35 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
             triangle_local(ea, eb, ec, e0, e1, e2),
             1.0, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
         )  # fmt: skip
-        store(z, 12, q, res[1:])
         z[21, q] = ok & (res[0] == CERTAIN)
+        store(z, 12, q, res[1:])
+    _redo_undecided(z, k0, nb, exact)
+    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, True)
+
+
+@njit(cache=True, error_model="numpy")
+def triangle_distance_block(V, P, n_j, k0, nb, dist, exact):
+    """:func:`triangle_block` for distances alone: its own loop, which
+    compiles without the closest point and barycentrics (15% less time
+    single-threaded on the speed benchmark's pairs)."""
+    z = np.empty((22, BLOCK))
+    gather_triangles(z, V, P, n_j, k0, nb)
+    # The loop is written out in both block functions: moved into an inlined
+    # helper, it compiled to code half as fast.
+    for q in range(BLOCK):
+        v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
+        v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
+        ea, eb, ec, e0, e1, e2, _, ok = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+        res = finish(
+            triangle_local(ea, eb, ec, e0, e1, e2),
+            1.0, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
+        )  # fmt: skip
+        z[21, q] = ok & (res[0] == CERTAIN)
+        z[12, q] = res[1]
+    _redo_undecided(z, k0, nb, exact)
+    d = dist[k0 : k0 + nb]
     for q in range(nb):
-        if z[21, q] != 0.0:
-            continue
-        px, py, pz = z[9, q], z[10, q], z[11, q]
-        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-            res = triangle(
-                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
-            )
-            exact[k0 + q] = res[0] != CERTAIN
-            store(z, 12, q, res[1:])
-        else:
-            nan = math.nan
-            store(z, 12, q, (nan, nan, nan, nan, nan, NONE, nan, nan, nan))
-    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
+        d[q] = z[12, q]
 
 
 @njit(cache=True, error_model="numpy")

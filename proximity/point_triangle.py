@@ -546,7 +546,8 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
     ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and the
     other outputs may be empty.  Blocks of queries go to the threads, each
     handled by its method's block function (:func:`_robust_block`,
-    :func:`_eberly_block`, :func:`certified.triangle_block`); the certified
+    :func:`_eberly_block`, :func:`certified.triangle_block` and its
+    distance-only twin); the certified
     method flags in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
@@ -555,8 +556,10 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
         nb = min(BLOCK, n - k0)
         if method == ROBUST:
             _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
+        elif method == CERTIFIED and full:
+            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact)
         elif method == CERTIFIED:
-            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
+            certified.triangle_distance_block(V, P, n_j, k0, nb, dist, exact)
         else:
             _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
 
