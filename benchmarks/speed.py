@@ -146,22 +146,11 @@ def round_rows(n, repeats):
 
 def loop_row(n, repeats):
     """Row 4: the narrow-phase call in a Python loop, against fcl."""
-    import fcl
+    from benchmarks.meshes import fcl_loop
 
     vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.2, 0.9, 0.1]])
     points = list(np.random.default_rng(2).uniform(-0.5, 1.5, size=(n, 3)))
-    model = fcl.BVHModel()
-    model.beginModel(3, 1)
-    model.addSubModel(vertices, np.array([[0, 1, 2]]))
-    model.endModel()
-    triangle = fcl.CollisionObject(model, fcl.Transform())
-    probe = fcl.CollisionObject(fcl.Sphere(0.0), fcl.Transform())
-    request = fcl.DistanceRequest(enable_nearest_points=True)
-
-    def with_fcl():
-        for p in points:
-            probe.setTranslation(p)
-            fcl.distance(triangle, probe, request, fcl.DistanceResult())
+    with_fcl = fcl_loop(vertices, np.array([[0, 1, 2]]), points)
 
     shape = proximity.Triangle(vertices)
 
