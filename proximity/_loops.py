@@ -72,6 +72,12 @@ def loop_views(out_shape, inputs):
     return views, n_j
 
 
+def single_shape(view):
+    """Whether a loop view from :func:`loop_views` repeats one element: the
+    one shape that every point of the batch is queried against."""
+    return all(n == 1 or stride == 0 for n, stride in zip(view.shape[:2], view.strides[:2], strict=True))
+
+
 # Batch kernels work in blocks of this many queries: gathered from the
 # broadcast inputs into local structure-of-arrays scratch, computed by a loop
 # over the scratch that compiles to SIMD code, and scattered to the outputs.
@@ -120,6 +126,28 @@ def gather_triangles(z, V, P, n_j, k0, nb):
         i += 1
         j = 0
     _zero_tail(z, 12, nb)
+
+
+@njit(inline="always")
+def gather_points(z, first, P, n_j, k0, nb):
+    """Rows ``first .. first + 2`` of ``z``: the points of queries
+    ``k0 .. k0 + nb``, for the block functions of a single shape."""
+    i = k0 // n_j
+    j = k0 - i * n_j
+    q = 0
+    while q < nb:
+        run = min(nb - q, n_j - j)
+        Pi = P[i]
+        for t in range(run):
+            z[first, q + t] = Pi[j + t, 0]
+            z[first + 1, q + t] = Pi[j + t, 1]
+            z[first + 2, q + t] = Pi[j + t, 2]
+        q += run
+        i += 1
+        j = 0
+    for row in range(first, first + 3):
+        for q in range(nb, BLOCK):
+            z[row, q] = 0.0
 
 
 @njit(inline="always")

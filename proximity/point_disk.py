@@ -26,9 +26,11 @@ from ._loops import (
     OUT2,
     OUT_FEATURE,
     OUT_FLAG,
+    gather_points,
     gather_round,
     loop_views,
     scatter_round,
+    single_shape,
     store,
 )
 from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
@@ -130,6 +132,20 @@ def exact_row(row, args, point):
     row[9] = 0.0
 
 
+@njit(inline="always", error_model="numpy")
+def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
+    """One query of the compiled loops' robust path, without branches:
+    its nine results, and whether it was in the safe window (where they hold)."""
+    dx, dy, dz = px - cx, py - cy, pz - cz
+    _, ok = window(dx, dy, dz, radius)
+    h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+    res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+    d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+    if not is_disk:
+        res = (d, s, x, y, z, RIM, on_axis, h, qq)
+    return res, ok
+
+
 @njit(cache=True, error_model="numpy")
 def _block(
     method,
@@ -164,14 +180,19 @@ def _block(
     gather_round(z, C, U, P, R, n_j, k0, nb)
     if method == ROBUST:
         for q in range(BLOCK):
-            cx, cy, cz, ux, uy, uz = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
-            dx, dy, dz, radius = z[6, q] - cx, z[7, q] - cy, z[8, q] - cz, z[9, q]
-            _, ok = window(dx, dy, dz, radius)
-            h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-            res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-            d, s, x, y, z_ = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-            if not is_disk:
-                res = (d, s, x, y, z_, RIM, on_axis, h, qq)
+            res, ok = _robust_row(
+                is_disk,
+                z[0, q],
+                z[1, q],
+                z[2, q],
+                z[3, q],
+                z[4, q],
+                z[5, q],
+                z[9, q],
+                z[6, q],
+                z[7, q],
+                z[8, q],
+            )
             store(z, 10, q, res)
             z[19, q] = ok
     else:
@@ -193,6 +214,42 @@ def _block(
     scatter_round(z, 10, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
+@njit(cache=True, error_model="numpy")
+def _robust_block_one(
+    is_disk, C, U, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full
+):
+    """:func:`_block` for the robust method and a batch against one shape,
+    ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
+
+    Only the points are gathered (rows 0-2).  The loop reads the shape as
+    scalars, so the compiler computes its own terms (such as the rim
+    direction used on the axis) once per block instead of once per query.
+    """
+    z = np.empty((13, BLOCK))
+    gather_points(z, 0, P, n_j, k0, nb)
+    cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
+    radius = R[0, 0]
+    # One loop for each kind, so that each compiles to the work of its kind only.
+    if is_disk:
+        for q in range(BLOCK):
+            res, ok = _robust_row(True, cx, cy, cz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
+            store(z, 3, q, res)
+            z[12, q] = ok
+    else:
+        for q in range(BLOCK):
+            res, ok = _robust_row(False, cx, cy, cz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
+            store(z, 3, q, res)
+            z[12, q] = ok
+    for q in range(nb):
+        if z[12, q] == 0.0:
+            # The robust method reads the unit normal only; it stands in for the normal as given.
+            res = _query(
+                ROBUST, is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q]
+            )
+            store(z, 3, q, res)
+    scatter_round(z, 3, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
+
+
 _SIGNATURE = types.void(
     types.int64,
     types.boolean,
@@ -202,6 +259,7 @@ _SIGNATURE = types.void(
     A_IN2,
     A_IN3,
     types.int64,
+    types.boolean,
     OUT1,
     OUT1,
     OUT2,
@@ -216,23 +274,47 @@ _SIGNATURE = types.void(
 
 @njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
 def _batch(
-    method, is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, exact, full
+    method,
+    is_disk,
+    C,
+    U,
+    N,
+    R,
+    P,
+    n_j,
+    one,
+    dist,
+    sqr,
+    point,
+    feature,
+    equidistant,
+    height,
+    radial,
+    exact,
+    full,
 ):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
-    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
-    only ``dist`` is written.  Blocks of queries go to the threads, each
-    handled by :func:`_block`; the certified method flags in ``exact`` the
-    rows its filter could not decide.
+    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides; ``one`` says that they
+    repeat one shape.  With ``full=False`` only ``dist`` is written.  Blocks
+    of queries go to the threads, each handled by :func:`_block` or, for the
+    robust method and one shape, :func:`_robust_block_one`; the certified
+    method flags in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
-        _block(
-            method, is_disk, C, U, N, R, P, n_j, k0, min(BLOCK, n - k0),
-            dist, sqr, point, feature, equidistant, height, radial, exact, full,
-        )  # fmt: skip
+        nb = min(BLOCK, n - k0)
+        if one and method == ROBUST:
+            _robust_block_one(
+                is_disk, C, U, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full
+            )
+        else:
+            _block(
+                method, is_disk, C, U, N, R, P, n_j, k0, nb,
+                dist, sqr, point, feature, equidistant, height, radial, exact, full,
+            )  # fmt: skip
 
 
 def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):
@@ -252,7 +334,8 @@ def query(method, is_disk, center, unit_normal, normal, radius, points, out_shap
         radial=_pool.empty(m),
     )
     exact = np.zeros(n if method == "certified" else 0, np.bool_)
-    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, *out.values(), exact, full)
+    one = all(single_shape(view) for view in (C, U, R))
+    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, one, *out.values(), exact, full)
     if method == "certified":
         rows = np.flatnonzero(exact)
         for k in rows:

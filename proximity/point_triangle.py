@@ -66,9 +66,11 @@ from ._loops import (
     OUT2,
     OUT_FEATURE,
     OUT_FLAG,
+    gather_points,
     gather_triangles,
     loop_views,
     scatter_triangles,
+    single_shape,
     store,
 )
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
@@ -532,22 +534,58 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
+@njit(cache=True, error_model="numpy")
+def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+    """:func:`_eberly_block` for a batch against one triangle, ``V[0, 0]``.
+
+    Only the points are gathered (rows 0-2).  The loop reads the vertices as
+    scalars, so the compiler computes the triangle's own terms (its edges,
+    ``a``, ``b``, ``c`` and ``det``) once per block instead of once per query.
+    """
+    z = np.empty((13, BLOCK))
+    gather_points(z, 0, P, n_j, k0, nb)
+    v = V[0, 0]
+    v0x, v0y, v0z, v1x, v1y, v1z = v[0, 0], v[0, 1], v[0, 2], v[1, 0], v[1, 1], v[1, 2]
+    v2x, v2y, v2z = v[2, 0], v[2, 1], v[2, 2]
+    for q in range(BLOCK):
+        px, py, pz = z[0, q], z[1, q], z[2, q]
+        res = _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+        store(z, 3, q, res)
+        z[12, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
+    for q in range(nb):
+        if z[12, q] == 0.0:
+            store(z, 3, q, _NAN_ROW)
+    scatter_triangles(z, 3, k0, nb, dist, sqr, point, feature, bary, full)
+
+
 _SIGNATURE = types.void(
-    types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
+    types.int64,
+    A_IN4,
+    A_IN3,
+    types.int64,
+    types.boolean,
+    OUT1,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT2,
+    OUT_FLAG,
+    types.boolean,
 )
 
 
 @njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
-def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
+def _batch(method, V, P, n_j, one, dist, sqr, point, feature, bary, exact, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
     (zero along broadcast dimensions); output row ``k`` is loop index
-    ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and the
-    other outputs may be empty.  Blocks of queries go to the threads, each
+    ``(k // J, k % J)``, and ``one`` says that ``V`` repeats one triangle.
+    With ``full=False`` only ``dist`` is written and the other outputs may
+    be empty.  Blocks of queries go to the threads, each
     handled by its method's block function (:func:`_robust_block`,
-    :func:`_eberly_block`, :func:`certified.triangle_block` and its
-    distance-only twin); the certified
+    :func:`_eberly_block` or, for one triangle, :func:`_eberly_block_one`,
+    :func:`certified.triangle_block` and its distance-only twin); the certified
     method flags in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
@@ -560,6 +598,8 @@ def _batch(method, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
             certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact)
         elif method == CERTIFIED:
             certified.triangle_distance_block(V, P, n_j, k0, nb, dist, exact)
+        elif one:
+            _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
         else:
             _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
 
@@ -577,7 +617,7 @@ def query(method, vertices, points, out_shape, full):
         barycentric=_pool.empty((m, 3)),
     )
     exact = np.zeros(n if method == "certified" else 0, np.bool_)
-    _batch(METHODS[method], V, P, n_j, *out.values(), exact, full)
+    _batch(METHODS[method], V, P, n_j, single_shape(V), *out.values(), exact, full)
     if method == "certified":
         rows = np.flatnonzero(exact)
         for k in rows:

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import proximity
+from benchmarks import scenes
 from proximity import Circle, Disk, Feature, Triangle
 
 TRI = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
@@ -239,3 +240,46 @@ def test_single_point_fast_path_matches_the_batch_path(kind, method):
             assert not single.point.flags.writeable
             assert isinstance(single.feature, Feature)
             np.testing.assert_array_equal(shape.distance(query, method=method), expected.distance)
+
+
+def _points_against(center, scene_points, rng):
+    """The scene's points, plus rows that leave the compiled loops' safe
+    window (far away and very near), ties on small integers, and NaN."""
+    far = center + rng.normal(size=(40, 3)) * 1e200
+    near = center + rng.normal(size=(40, 3)) * 1e-200
+    grid = rng.integers(-2, 3, size=(40, 3)).astype(float)
+    points = np.concatenate([scene_points, far, near, grid])
+    points[[5, 150, 299]] = [np.nan, 0.0, 0.0]
+    return rng.permutation(points)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("family", scenes.TRIANGLE_FAMILIES, ids=lambda f: f.label)
+def test_one_triangle_takes_the_same_bits_as_pairs(family, method):
+    """A batch against one triangle has its own compiled loop; every field
+    matches the same triangle repeated, which takes the general loop."""
+    rng = np.random.default_rng(11)
+    scene = family(rng, 300)
+    points = _points_against(scene.vertices[0, 0], scene.points, rng)
+    one = Triangle(scene.vertices[0]).closest_point(points, method=method)
+    pairs = Triangle(np.repeat(scene.vertices[:1], len(points), axis=0)).closest_point(points, method=method)
+    for name, value in vars(pairs).items():
+        np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("cls", [Circle, Disk])
+@pytest.mark.parametrize("family", scenes.DISK_FAMILIES, ids=lambda f: f.label)
+def test_one_circle_or_disk_takes_the_same_bits_as_pairs(family, cls, method):
+    """:func:`test_one_triangle_takes_the_same_bits_as_pairs` for circles and disks."""
+    rng = np.random.default_rng(12)
+    scene = family(rng, 300)
+    points = _points_against(scene.center[0], scene.points, rng)
+    one = cls(scene.center[0], scene.normal[0], scene.radius[0]).closest_point(points, method=method)
+    n = len(points)
+    repeated = cls(
+        np.tile(scene.center[0], (n, 1)), np.tile(scene.normal[0], (n, 1)), np.repeat(scene.radius[:1], n)
+    )
+    pairs = repeated.closest_point(points, method=method)
+    for name, value in vars(pairs).items():
+        np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
