@@ -38,7 +38,7 @@ then the lowest index.
 import math
 
 import numpy as np
-from numba import literal_unroll, njit
+from numba import literal_unroll, njit, uint64
 
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
@@ -253,27 +253,28 @@ def _sel(c, x, y):
 
 
 @njit(inline="always", error_model="numpy")
-def triangle_local(a, b, c, e0, e1, e2):
-    """The certified query on exact differences in the safe window.
+def _vertex(a, b, c, feature):
+    """The squared distance to the closest vertex, ``|X|^2``.
 
-    ``a, b, c`` are the vertices relative to ``P`` and ``e0, e1, e2`` the
-    edges ``V1 - V0``, ``V2 - V0``, ``V2 - V1``, each a double-double vector.
-    Returns ``(ok, distance, sqr_distance, x, y, z, feature, b0, b1, b2)``
-    with ``(x, y, z)`` relative to ``P`` (the caller puts vertices back
-    exactly).  The vertex, edge and face formulas are all evaluated, on the
-    vertex and edge the classification selects, and the answer selected, so
-    that a loop of queries vectorises.
+    ``a, b, c`` are the vertices relative to ``P``, each a double-double
+    vector.  Returns ``(ok, distance, sqr_distance, x, y, z, b0, b1, b2)``
+    with ``(x, y, z)`` relative to ``P``.
     """
-    feature = _classify(
-        a[0], a[2], a[4], b[0], b[2], b[4], c[0], c[2], c[4],
-        e0[0], e0[2], e0[4], e1[0], e1[2], e1[4], e2[0], e2[2], e2[4],
-    )  # fmt: skip
-
-    # Vertex: d^2 = |X|^2.
     x = _sel(feature == VERTEX0, a, _sel(feature == VERTEX1, b, c))
     vh, vl, dv = _sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
+    ok, r, s = _faithful_sqrt(vh, vl, dv)
+    b0 = 1.0 if feature == VERTEX0 else 0.0
+    b1 = 1.0 if feature == VERTEX1 else 0.0
+    b2 = 1.0 if feature == VERTEX2 else 0.0
+    return ok, r, s, x[0], x[2], x[4], b0, b1, b2
 
-    # Edge from X along E: d^2 = |X x E|^2 / |E|^2.
+
+@njit(inline="always", error_model="numpy")
+def _edge(a, b, c, e0, e1, e2, feature):
+    """:func:`_vertex` for the closest edge, from ``X`` along ``E``: ``|X x E|^2 / |E|^2``.
+
+    ``e0, e1, e2`` are the edges ``V1 - V0``, ``V2 - V0``, ``V2 - V1``.
+    """
     on01 = feature == EDGE01
     on12 = feature == EDGE12
     p = _sel(on01, a, _sel(on12, b, c))
@@ -282,6 +283,7 @@ def triangle_local(a, b, c, e0, e1, e2):
     nh, nl, dn = _norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
     mh, ml, dm = _sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
     eh, el, de = _ratio(nh, nl, dn, mh, ml, dm)
+    ok, r, s = _faithful_sqrt(eh, el, de)
     t = -(p[0] * e[0] + p[2] * e[2] + p[4] * e[4]) / max(e[0] * e[0] + e[2] * e[2] + e[4] * e[4], 5e-324)
     t = min(max(t, 0.0), 1.0)
     near_end = t > 0.5
@@ -290,52 +292,53 @@ def triangle_local(a, b, c, e0, e1, e2):
     ex = p[0] + base * e[0] + u * e[0]
     ey = p[2] + base * e[2] + u * e[2]
     ez = p[4] + base * e[4] + u * e[4]
+    b0 = 1.0 - t if on01 else (0.0 if on12 else t)
+    b1 = t if on01 else (1.0 - t if on12 else 0.0)
+    b2 = 0.0 if on01 else (t if on12 else 1.0 - t)
+    return ok, r, s, ex, ey, ez, b0, b1, b2
 
-    # Face: d = |n . A| / |n| with n = E0 x E1.
+
+@njit(inline="always", error_model="numpy")
+def _face(a, b, c, e0, e1, e2):
+    """:func:`_vertex` for the face: ``d = |n . A| / |n|`` with ``n = E0 x E1``."""
     n = _cross3(e0[0], e0[1], e0[2], e0[3], e0[4], e0[5], e1[0], e1[1], e1[2], e1[3], e1[4], e1[5])
     th, tl, dt = _dot_bounded(n, (n[6], n[7], n[8]), a)
     th2, tl2 = dd.sqr(th, tl)
     dt2 = 2.0 * abs(th) * dt + dt * dt + 8.0 * U * U * abs(th2)
     gh, gl, dg = _norm2_bounded(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8])
     fh, fl, df = _ratio(th2, tl2, dt2, gh, gl, dg)
+    ok, r, s = _faithful_sqrt(fh, fl, df)
     fx, fy, fz = cross_accurate(e0[0], e0[2], e0[4], e1[0], e1[2], e1[4])
     q = dot3_accurate(fx, fy, fz, a[0], a[2], a[4]) / max(fx * fx + fy * fy + fz * fz, 5e-324)
     wc = max(edge_function(fx, fy, fz, a[0], a[2], a[4], e0[0], e0[2], e0[4]), 0.0)
     wa = max(edge_function(fx, fy, fz, b[0], b[2], b[4], e2[0], e2[2], e2[4]), 0.0)
     wb = max(-edge_function(fx, fy, fz, c[0], c[2], c[4], e1[0], e1[2], e1[4]), 0.0)
     w = max(wa + wb + wc, 5e-324)
+    return ok, r, s, q * fx, q * fy, q * fz, wa / w, wb / w, wc / w
 
-    vertex = (feature >= VERTEX0) & (feature <= VERTEX2)
-    face = feature == FACE
-    sh = vh if vertex else (fh if face else eh)
-    sl = vl if vertex else (fl if face else el)
-    delta = dv if vertex else (df if face else de)
-    ok, r, s = _faithful_sqrt(sh, sl, delta)
-    ok = ok & (feature != NONE)
-    px = x[0] if vertex else (q * fx if face else ex)
-    py = x[2] if vertex else (q * fy if face else ey)
-    pz = x[4] if vertex else (q * fz if face else ez)
-    b0 = (
-        (1.0 if feature == VERTEX0 else 0.0)
-        if vertex
-        else (wa / w if face else (1.0 - t if on01 else (0.0 if on12 else t)))
-    )
-    b1 = (
-        (1.0 if feature == VERTEX1 else 0.0)
-        if vertex
-        else (wb / w if face else (t if on01 else (1.0 - t if on12 else 0.0)))
-    )
-    b2 = (
-        (1.0 if feature == VERTEX2 else 0.0)
-        if vertex
-        else (wc / w if face else (0.0 if on01 else (t if on12 else 1.0 - t)))
-    )
-    return ok, r, s, px, py, pz, feature, b0, b1, b2
+
+@njit(inline="always", error_model="numpy")
+def _classify_local(a, b, c, e0, e1, e2):
+    """:func:`_classify` on the leading parts of the exact differences."""
+    return _classify(
+        a[0], a[2], a[4], b[0], b[2], b[4], c[0], c[2], c[4],
+        e0[0], e0[2], e0[4], e1[0], e1[2], e1[4], e2[0], e2[2], e2[4],
+    )  # fmt: skip
+
+
+@njit(inline="always", error_model="numpy")
+def _kind(feature):
+    """0 for a vertex, 1 for an edge, 2 for the face, 3 for NONE (undecided)."""
+    if feature == NONE:
+        return 3
+    if feature <= VERTEX2:
+        return 0
+    return 2 if feature == FACE else 1
 
 
 @njit(inline="always", error_model="numpy")
 def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
-    """Exact differences for :func:`triangle_local`, the largest ``|V - P|``,
+    """Exact differences for :func:`_vertex`, :func:`_edge` and :func:`_face`, the largest ``|V - P|``,
     and whether all of them are in the safe window (and finite)."""
     a = _dd_vec(px, py, pz, v0x, v0y, v0z)
     b = _dd_vec(px, py, pz, v1x, v1y, v1z)
@@ -368,8 +371,105 @@ def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
 
 
 @njit(inline="always", error_model="numpy")
-def _redo_undecided(z, k0, nb, exact):
-    """Redo with :func:`triangle` the queries of a block that the filter left."""
+def _local_at(w, m):
+    """The exact differences of the query in column ``m`` of ``w`` (rows 0-11
+    as :func:`~._loops.gather_triangles`)."""
+    a, b, c, e0, e1, e2, _, _ = differences(
+        w[0, m], w[1, m], w[2, m], w[3, m], w[4, m], w[5, m],
+        w[6, m], w[7, m], w[8, m], w[9, m], w[10, m], w[11, m],
+    )  # fmt: skip
+    return a, b, c, e0, e1, e2
+
+
+@njit(inline="always", error_model="numpy")
+def _store_at(w, m, part, feature):
+    """A :func:`_vertex`-style result, finished, into rows 13-21 of ``w`` and its status into row 22."""
+    ok, r, s, x, y, z, b0, b1, b2 = part
+    res = finish(
+        (ok, r, s, x, y, z, feature, b0, b1, b2), 1.0,
+        w[0, m], w[1, m], w[2, m], w[3, m], w[4, m], w[5, m],
+        w[6, m], w[7, m], w[8, m], w[9, m], w[10, m], w[11, m],
+    )  # fmt: skip
+    store(w, 13, m, res[1:])
+    w[22, m] = res[0]
+
+
+@njit(cache=True, error_model="numpy")
+def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+    """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
+
+    As ``point_triangle._robust_block``: gathered into local scratch and
+    classified by a loop that compiles to SIMD code.  The formula for the
+    squared distance differs by feature (vertex, edge or face) and each is
+    costly in double-double, so the queries are then sorted by kind, and
+    each kind computed by its own SIMD loop: a loop computing all three
+    formulas for every query took 1.6 times as long on the speed benchmark's
+    pairs.  Queries that the filter could not certify (outside the safe
+    window, or undecided) are redone one by one by :func:`triangle`;
+    ``exact`` flags the rows that even it left to the exact fallback.
+    """
+    z = np.empty((22, BLOCK))
+    gather_triangles(z, V, P, n_j, k0, nb)
+    kinds = np.empty(BLOCK)
+    for q in range(BLOCK):
+        a, b, c, e0, e1, e2, _, ok = differences(
+            z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
+            z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q],
+        )  # fmt: skip
+        f = _classify_local(a, b, c, e0, e1, e2)
+        z[12, q] = f
+        kinds[q] = _kind(f) if ok else 3
+    # Columns of w in kind order: vertices, edges, then faces.  The counts
+    # are scalars: read from an array, the loops' bounds would be reloaded
+    # after every store, and the loops would not compile to SIMD code.
+    n_vertex = 0
+    n_edge = 0
+    n_face = 0
+    for q in range(nb):
+        z[21, q] = 0.0
+        k = kinds[q]
+        n_vertex += k == 0.0
+        n_edge += k == 1.0
+        n_face += k == 2.0
+    order = np.empty(BLOCK, np.int64)
+    i_vertex, i_edge, i_face = 0, n_vertex, n_vertex + n_edge
+    for q in range(nb):
+        k = kinds[q]
+        if k == 0.0:
+            order[i_vertex] = q
+            i_vertex += 1
+        elif k == 1.0:
+            order[i_edge] = q
+            i_edge += 1
+        elif k == 2.0:
+            order[i_face] = q
+            i_face += 1
+    n = n_vertex + n_edge + n_face
+    w = np.empty((23, BLOCK))
+    for m in range(n):
+        q = order[m]
+        for row in range(13):
+            w[row, m] = z[row, q]
+    # Each kind's loop indexes with an unsigned column, which the compiler
+    # knows to be non-negative: with a signed one offset by a run-time start,
+    # the index's wrap-around test keeps the loop from compiling to SIMD code.
+    for k in range(n_vertex):
+        m = uint64(k)
+        a, b, c, _, _, _ = _local_at(w, m)
+        _store_at(w, m, _vertex(a, b, c, w[12, m]), w[12, m])
+    for k in range(n_edge):
+        m = uint64(n_vertex + k)
+        a, b, c, e0, e1, e2 = _local_at(w, m)
+        _store_at(w, m, _edge(a, b, c, e0, e1, e2, w[12, m]), w[12, m])
+    for k in range(n_face):
+        m = uint64(n_vertex + n_edge + k)
+        a, b, c, e0, e1, e2 = _local_at(w, m)
+        _store_at(w, m, _face(a, b, c, e0, e1, e2), w[12, m])
+    for m in range(n):
+        q = order[m]
+        for row in range(9):
+            z[12 + row, q] = w[13 + row, m]
+        z[21, q] = w[22, m] == CERTAIN
     for q in range(nb):
         if z[21, q] != 0.0:
             continue
@@ -383,57 +483,7 @@ def _redo_undecided(z, k0, nb, exact):
         else:
             nan = math.nan
             store(z, 12, q, (nan, nan, nan, nan, nan, NONE, nan, nan, nan))
-
-
-@njit(cache=True, error_model="numpy")
-def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact):
-    """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
-
-    As ``point_triangle._robust_block``: gathered into local scratch,
-    filtered by a loop that compiles to SIMD code, and redone one by one by
-    :func:`triangle` where that loop could not certify them (outside the
-    safe window, or undecided); ``exact`` flags the rows that even
-    :func:`triangle` left to the exact fallback.
-    """
-    z = np.empty((22, BLOCK))
-    gather_triangles(z, V, P, n_j, k0, nb)
-    for q in range(BLOCK):
-        v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
-        v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
-        ea, eb, ec, e0, e1, e2, _, ok = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
-        res = finish(
-            triangle_local(ea, eb, ec, e0, e1, e2),
-            1.0, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
-        )  # fmt: skip
-        z[21, q] = ok & (res[0] == CERTAIN)
-        store(z, 12, q, res[1:])
-    _redo_undecided(z, k0, nb, exact)
-    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, True)
-
-
-@njit(cache=True, error_model="numpy")
-def triangle_distance_block(V, P, n_j, k0, nb, dist, exact):
-    """:func:`triangle_block` for distances alone: its own loop, which
-    compiles without the closest point and barycentrics (15% less time
-    single-threaded on the speed benchmark's pairs)."""
-    z = np.empty((22, BLOCK))
-    gather_triangles(z, V, P, n_j, k0, nb)
-    # The loop is written out in both block functions: moved into an inlined
-    # helper, it compiled to code half as fast.
-    for q in range(BLOCK):
-        v0x, v0y, v0z, v1x, v1y, v1z = z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q]
-        v2x, v2y, v2z, px, py, pz = z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q]
-        ea, eb, ec, e0, e1, e2, _, ok = differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
-        res = finish(
-            triangle_local(ea, eb, ec, e0, e1, e2),
-            1.0, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
-        )  # fmt: skip
-        z[21, q] = ok & (res[0] == CERTAIN)
-        z[12, q] = res[1]
-    _redo_undecided(z, k0, nb, exact)
-    d = dist[k0 : k0 + nb]
-    for q in range(nb):
-        d[q] = z[12, q]
+    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 @njit(cache=True, error_model="numpy")
@@ -467,9 +517,19 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
         g = (1.0 / f1) * (1.0 / f2)
         if not g < np.inf:
             return fail
-    r = finish(
-        triangle_local(a, b, c, e0, e1, e2), g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz
-    )
+    feature = _classify_local(a, b, c, e0, e1, e2)
+    kind = _kind(feature)
+    if kind == 3:
+        return fail
+    if kind == 0:
+        part = _vertex(a, b, c, feature)
+    elif kind == 1:
+        part = _edge(a, b, c, e0, e1, e2, feature)
+    else:
+        part = _face(a, b, c, e0, e1, e2)
+    ok, d, s, x, y, z, b0, b1, b2 = part
+    r = (ok, d, s, x, y, z, feature, b0, b1, b2)
+    r = finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
     return r if r[0] == CERTAIN else fail
 
 

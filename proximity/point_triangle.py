@@ -585,7 +585,7 @@ def _batch(method, V, P, n_j, one, dist, sqr, point, feature, bary, exact, full)
     be empty.  Blocks of queries go to the threads, each
     handled by its method's block function (:func:`_robust_block`,
     :func:`_eberly_block` or, for one triangle, :func:`_eberly_block_one`,
-    :func:`certified.triangle_block` and its distance-only twin); the certified
+    or :func:`certified.triangle_block`); the certified
     method flags in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
@@ -594,10 +594,8 @@ def _batch(method, V, P, n_j, one, dist, sqr, point, feature, bary, exact, full)
         nb = min(BLOCK, n - k0)
         if method == ROBUST:
             _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
-        elif method == CERTIFIED and full:
-            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact)
         elif method == CERTIFIED:
-            certified.triangle_distance_block(V, P, n_j, k0, nb, dist, exact)
+            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
         elif one:
             _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
         else:
