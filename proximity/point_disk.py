@@ -274,25 +274,9 @@ _SIGNATURE = types.void(
 
 @njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
 def _batch(
-    method,
-    is_disk,
-    C,
-    U,
-    N,
-    R,
-    P,
-    n_j,
-    one,
-    dist,
-    sqr,
-    point,
-    feature,
-    equidistant,
-    height,
-    radial,
-    exact,
-    full,
-):
+    method, is_disk, C, U, N, R, P, n_j, one,
+    dist, sqr, point, feature, equidistant, height, radial, exact, full,
+):  # fmt: skip
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
