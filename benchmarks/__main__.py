@@ -6,8 +6,9 @@ Steps, each from the saved output of the one before:
    writes ``OUT/raw.json``;
 2. the charts (:mod:`benchmarks.charts`) and ``OUT/report.md``
    (:mod:`benchmarks.report`) are drawn from that file;
-3. the speed comparison (``benchmarks.speed``, when present) runs, its
-   output is saved to ``OUT/speed.txt`` and added to the report.
+3. the speed comparison (``python -m benchmarks.speed``, when present)
+   runs in a new process; its output is saved to ``OUT/speed.txt`` and
+   added to the report.
 
 Options: ``--quick`` for a smoke run (small batches; about half a minute
 for the suite on two cores, kernels cached), ``--seed``,
@@ -18,63 +19,45 @@ section of ``README.md`` from the same data.
 """
 
 import argparse
-import contextlib
 import dataclasses
-import importlib
 import importlib.util
-import io
+import subprocess
 import sys
 import time
-import traceback
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-class _Tee(io.TextIOBase):
-    """Write to several streams: the speed step prints as it goes and is also saved."""
-
-    def __init__(self, *streams):
-        self.streams = streams
-
-    def write(self, text):
-        for stream in self.streams:
-            stream.write(text)
-        return len(text)
-
-    def flush(self):
-        for stream in self.streams:
-            stream.flush()
-
-
 def run_speed(quick, path):
-    """Run ``benchmarks.speed.main``, echoing and saving its output to ``path``.
+    """Run ``python -m benchmarks.speed`` in a new process, echoing and saving
+    its output (with any traceback) to ``path``.
+
+    A new process, because the step times kernels against other libraries:
+    after the suite, this process's heap (and with it what fresh pages cost,
+    see ``benchmarks/speed.py``) is in a state no other run of the step
+    shares, and the step's table should be the one its own command gives.
 
     Returns
     -------
     bool
-        False if the step raised (its traceback is saved with the output);
-        True if it ran or is not there yet.
+        False if the step failed; True if it ran or is not there yet.
     """
     if importlib.util.find_spec("benchmarks.speed") is None:
         print("benchmarks.speed is not there yet: speed step skipped", file=sys.stderr)
         path.unlink(missing_ok=True)
         return True
-    speed = importlib.import_module("benchmarks.speed")
-    captured = io.StringIO()
-    ok = True
-    with contextlib.redirect_stdout(_Tee(sys.stdout, captured)):
-        try:
-            returned = speed.main(["--quick"] if quick else [])
-        except Exception:  # the step's failure is reported, after the suite's results are safe
-            traceback.print_exc(file=captured)
-            traceback.print_exc()
-            returned, ok = None, False
-    text = captured.getvalue()
-    if isinstance(returned, str) and returned not in text:
-        text += returned
-    path.write_text(text, encoding="utf-8")
-    return ok
+    command = [sys.executable, "-m", "benchmarks.speed"] + (["--quick"] if quick else [])
+    lines = []
+    with subprocess.Popen(
+        command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+    ) as child:
+        for line in child.stdout:
+            sys.stdout.write(line)
+            sys.stdout.flush()
+            lines.append(line)
+    path.write_text("".join(lines), encoding="utf-8")
+    return child.returncode == 0
 
 
 def main(argv=None):
