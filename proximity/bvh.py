@@ -129,7 +129,7 @@ def _triangle(method, q, k, px, py, pz):
         d, sqr, x, y, z, f, b0, b1, b2 = point_triangle._eberly_query(
             q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
         )
-        return certified.CERTAIN, d, sqr, x, y, z, f, b0, b1, b2
+        return certified.CERTAIN, d, sqr, x, y, z, int(f), b0, b1, b2
     # A code this dispatch does not know: no answer, rather than another method's.
     nan = math.nan
     return certified.CERTAIN, nan, nan, nan, nan, nan, NONE, nan, nan, nan
