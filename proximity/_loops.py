@@ -91,9 +91,9 @@ BLOCK = 128
 
 
 @njit(inline="always")
-def _zero_tail(z, rows, nb):
+def _zero_tail(z, first, last, nb):
     # The columns past the last query of a short block are computed too.
-    for row in range(rows):
+    for row in range(first, last):
         for q in range(nb, BLOCK):
             z[row, q] = 0.0
 
@@ -125,7 +125,7 @@ def gather_triangles(z, V, P, n_j, k0, nb):
         q += run
         i += 1
         j = 0
-    _zero_tail(z, 12, nb)
+    _zero_tail(z, 0, 12, nb)
 
 
 @njit(inline="always")
@@ -145,9 +145,7 @@ def gather_points(z, first, P, n_j, k0, nb):
         q += run
         i += 1
         j = 0
-    for row in range(first, first + 3):
-        for q in range(nb, BLOCK):
-            z[row, q] = 0.0
+    _zero_tail(z, first, first + 3, nb)
 
 
 @njit(inline="always")
@@ -177,7 +175,7 @@ def gather_round(z, C, U, P, R, n_j, k0, nb):
         q += run
         i += 1
         j = 0
-    _zero_tail(z, 10, nb)
+    _zero_tail(z, 0, 10, nb)
 
 
 @njit(inline="always")
