@@ -25,6 +25,28 @@ OUT2 = types.Array(types.float64, 2, "C")
 OUT_FEATURE = types.Array(types.int8, 1, "C")
 OUT_FLAG = types.Array(types.boolean, 1, "C")
 
+# The one-query kernels' arguments: the output row, the method code, the
+# shape's values (read-only) and the point, in any layout.
+SINGLE_ARGS = (
+    OUT1,
+    types.int64,
+    types.Array(types.float64, 1, "C", readonly=True),
+    types.Array(types.float64, 1, "A"),
+)
+
+
+def single_entry(kernel):
+    """The compiled one-query ``kernel``, to be called without Numba's dispatch.
+
+    The dispatcher matches the types of the arguments to its compiled
+    versions on every call, which is a tenth of a fast-path query.  The
+    entry point returned here skips that and reads its arguments as
+    :data:`SINGLE_ARGS` without checking them, so the caller must pass
+    exactly those: a C-contiguous float64 row of ten, an int, the shape's
+    float64 values, and a float64 point of shape ``(3,)``.
+    """
+    return kernel.compile(SINGLE_ARGS)
+
 
 def loop_views(out_shape, inputs):
     """View ``inputs`` over a loop of at most two dimensions.

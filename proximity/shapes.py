@@ -105,8 +105,11 @@ class _Facade:
             return None
         kernel = self._single_kernel
         if kernel is None:
-            kernel = importlib.import_module(self._kernel_module).single
-            # A compiled function binds like a method, hence staticmethod.
+            from ._loops import single_entry  # loads the compiler, as the kernels do
+
+            kernel = single_entry(importlib.import_module(self._kernel_module).single)
+            # A built-in function does not bind as a method; staticmethod
+            # says so, and keeps it that way should the kernel change.
             type(self)._single_kernel = staticmethod(kernel)
         row = np.empty(10)
         kernel(row, code, self._args, points)

@@ -231,7 +231,10 @@ def test_single_point_fast_path_matches_the_batch_path(kind, method):
     batch = shape.closest_point(points, method=method)
     for k, p in enumerate(points):
         strided = np.stack([p, p], axis=1)[:, 0]  # a non-contiguous view
-        for query in (p, tuple(p), list(p), strided):
+        reversed_ = p[::-1].copy()[::-1]  # a negative stride
+        frozen = p.copy()
+        frozen.flags.writeable = False
+        for query in (p, tuple(p), list(p), strided, reversed_, frozen, p.astype(">f8")):
             single = shape.closest_point(query, method=method)
             expected = batch[k]
             assert type(single) is type(expected)
