@@ -1,7 +1,8 @@
 """Speed of the compiled kernels, side by side with the libraries people use.
 
-Every ratio is measured in one run, on the same inputs, as the median of at
-least five repeats; nothing is compared with a number from another run.
+Every ratio is measured in one run, on the same inputs, from medians of at
+least five repeats (three rounds of five for the batch rows); nothing is
+compared with a number from another run.
 
     python -m benchmarks.speed [--quick] [--json FILE]
 
@@ -38,29 +39,33 @@ import proximity
 from benchmarks import scenes
 
 REPEATS = 5
+ROUNDS = 3
 
 
-def median_times(fns, repeats=REPEATS):
+def median_times(fns, repeats=REPEATS, rounds=ROUNDS):
     """Median wall time of each function in ``fns`` (a dict), over
-    ``repeats`` consecutive calls after one warm-up call.
+    ``rounds`` rounds of ``repeats`` timed calls each.
 
-    Each function's calls run back to back, so each is timed in the steady
-    state of repeating itself, as a program calling it in a loop would see
-    it.  Interleaving the calls of different functions would time each one
-    right after the other's large temporaries were freed, and fresh pages
-    are slow on this project's machine: a circle's distances took 15 ms
-    instead of 7 ms straight after the NumPy formula.
+    In a round every function takes its turn: one untimed call, then its
+    timed calls back to back, so that each is timed in the steady state of
+    repeating itself, as a program calling it in a loop would see it.
+    Alternating single calls of different functions would time each one
+    right after the other's large temporaries were freed, and fresh pages are
+    slow on this project's machine: a circle's distances took 15 ms instead
+    of 7 ms straight after the NumPy formula.  The rounds spread each
+    function's calls over the whole measurement, so that a slow phase of the
+    shared machine, which lasts seconds, slows both sides of a ratio rather
+    than only the side timed during it.
     """
-    times = {}
-    for name, fn in fns.items():
-        fn()
-        runs = []
-        for _ in range(repeats):
-            start = time.perf_counter()
+    runs = {name: [] for name in fns}
+    for _ in range(rounds):
+        for name, fn in fns.items():
             fn()
-            runs.append(time.perf_counter() - start)
-        times[name] = float(np.median(runs))
-    return times
+            for _ in range(repeats):
+                start = time.perf_counter()
+                fn()
+                runs[name].append(time.perf_counter() - start)
+    return {name: float(np.median(times)) for name, times in runs.items()}
 
 
 def trimesh_pairs(vertices, points):
@@ -340,7 +345,11 @@ def main(argv=None):
     args = parser.parse_args(argv)
     rows = run(args.quick, args.compile_time)
     text = format_table(rows)
-    header = f"numba threads: {proximity_threads()}; median of {3 if args.quick else REPEATS} repeats\n\n"
+    repeats = 3 if args.quick else REPEATS
+    header = (
+        f"numba threads: {proximity_threads()}; batch rows: median of {ROUNDS} rounds x {repeats} repeats, "
+        f"Python loop: {3 * repeats} alternations\n\n"
+    )
     print(header + text)
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
