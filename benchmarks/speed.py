@@ -21,8 +21,10 @@ Rows:
 5. Peak memory of a 10M-pair query, above its inputs, against the size of its
    outputs plus 64 MB.
 6. Start-up: ``import proximity``, and a new process's first result with the
-   compiled kernels cached on disk; with ``--compile-time``, also the first
-   run ever, which compiles every kernel into an empty cache.
+   compiled kernels cached on disk, beside the first result of a one-line
+   cached Numba kernel (Numba's own start-up, the floor under ours); with
+   ``--compile-time``, also the first run ever, which compiles every kernel
+   into an empty cache.
 """
 
 import argparse
@@ -248,15 +250,32 @@ def _seconds_row(case, seconds, limit):
     }
 
 
+# A one-line parallel kernel, cached on disk like proximity's: a new process
+# that imports NumPy and Numba and runs it pays for Numba's own start-up
+# (importing it, setting up its compiler, launching its threads) and little
+# else, so its time is the floor under any first result of a Numba library.
+_FLOOR_MODULE = """
+from numba import njit, prange, types
+
+
+@njit(types.void(types.float64[::1]), parallel=True, cache=True)
+def fill(out):
+    for i in prange(out.shape[0]):
+        out[i] = i
+"""
+
+
 def startup_rows(repeats, compile_time=False):
-    """Row 6: import time, first result with a warm cache, and (optionally) the
-    time to compile every kernel into an empty cache, which takes minutes.
+    """Row 6: import time, first results with a warm cache, Numba's own
+    start-up for comparison, and (optionally) the time to compile every
+    kernel into an empty cache, which takes minutes.
 
     ``import proximity`` is timed to the end of the process.  The first
     results are timed to the moment the child prints after its query, which
     is what the one-second limit is about; the time to exit after it (when
     the interpreter tears down the compiler's modules) is printed too, for
-    the whole command.
+    the whole command.  The commands take turns, one process each per
+    round, so that a slow phase of the machine slows them all alike.
     """
     first = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros((10, 3)))"
     single = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))"
@@ -264,19 +283,32 @@ def startup_rows(repeats, compile_time=False):
         "import numpy as np, proximity; "
         "proximity.Disk(np.zeros(3), np.ones(3), 1).closest_point(np.zeros((10, 3)))"
     )
-    _process_time(first), _process_time(single), _process_time(disk)  # warm the on-disk cache
-    rows = []
-    seconds = np.median([_process_time("import proximity")[1] for _ in range(repeats)])
-    rows.append(_seconds_row("python -c 'import proximity'", float(seconds), 0.5))
-    exits = []
-    for label, code in (
-        ("new process, first batch result (triangles, cache warm)", first),
-        ("new process, first single-point result (cache warm)", single),
-        ("new process, first batch result (disks, cache warm)", disk),
-    ):
-        times = np.array([_process_time(code) for _ in range(repeats)])
-        rows.append(_seconds_row(label, float(np.median(times[:, 0])), 1.0))
-        exits.append(times[:, 1])
+    results = {
+        "new process, first batch result (triangles, cache warm)": first,
+        "new process, first single-point result (cache warm)": single,
+        "new process, first batch result (disks, cache warm)": disk,
+    }
+    floor_case = "new process, first result of a one-line cached Numba kernel (Numba's own start-up)"
+    with tempfile.TemporaryDirectory() as floor_dir:
+        with open(os.path.join(floor_dir, "numba_floor.py"), "w", encoding="utf-8") as f:
+            f.write(_FLOOR_MODULE)
+        floor = (
+            f"import sys; sys.path.insert(0, {floor_dir!r}); "
+            "import numpy as np, numba_floor; numba_floor.fill(np.zeros(10))"
+        )
+        commands = {"import": "import proximity", **results, floor_case: floor}
+        for code in commands.values():
+            _process_time(code)  # warm the on-disk caches
+        times = {case: [] for case in commands}
+        for _ in range(repeats):
+            for case, code in commands.items():
+                times[case].append(_process_time(code))
+    times = {case: np.array(t) for case, t in times.items()}
+    rows = [_seconds_row("python -c 'import proximity'", float(np.median(times["import"][:, 1])), 0.5)]
+    for case in results:
+        rows.append(_seconds_row(case, float(np.median(times[case][:, 0])), 1.0))
+    rows.append(_seconds_row(floor_case, float(np.median(times[floor_case][:, 0])), None))
+    exits = np.concatenate([times[case][:, 1] for case in results])
     rows.append(
         _seconds_row("the same three commands, to the end of the process", float(np.median(exits)), None)
     )
