@@ -15,7 +15,9 @@ for the suite on two cores, kernels cached), ``--seed``,
 ``--out DIR`` (default ``bench-results``), ``--report-only`` to redraw the
 charts and report from existing raw data, ``--no-speed`` to skip step 3, and
 ``--publish`` to copy the charts to ``docs/`` and rewrite the benchmark
-section of ``README.md`` from the same data.
+section of ``README.md`` from the same data; ``--package-python`` is passed
+to the speed step (``make bench`` gives it an environment with the package
+alone, for the start-up rows).
 """
 
 import argparse
@@ -29,7 +31,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def run_speed(quick, path):
+def run_speed(quick, path, package_python=None):
     """Run ``python -m benchmarks.speed`` in a new process, echoing and saving
     its output (with any traceback) to ``path``.
 
@@ -48,6 +50,8 @@ def run_speed(quick, path):
         path.unlink(missing_ok=True)
         return True
     command = [sys.executable, "-m", "benchmarks.speed"] + (["--quick"] if quick else [])
+    if package_python:
+        command += ["--package-python", package_python]
     lines = []
     with subprocess.Popen(
         command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
@@ -77,6 +81,11 @@ def main(argv=None):
         help="copy the charts to docs/ and rewrite README.md's benchmark section",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--package-python",
+        metavar="PYTHON",
+        help="passed to the speed step: an interpreter with the package and its dependencies alone",
+    )
     args = parser.parse_args(argv)
 
     # Imported here so that --help answers without loading numba and the libraries.
@@ -98,7 +107,7 @@ def main(argv=None):
     pngs = charts.draw_all(raw, out)
     report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
     if not args.report_only and not args.no_speed:
-        ok = run_speed(raw["meta"]["config"]["quick"], speed_path)
+        ok = run_speed(raw["meta"]["config"]["quick"], speed_path, args.package_python)
         report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
     print(f"report: {out / 'report.md'}", file=sys.stderr)
     if args.publish:

@@ -4,7 +4,7 @@ Every ratio is measured in one run, on the same inputs, from medians of at
 least five repeats (three rounds of five for the batch rows); nothing is
 compared with a number from another run.
 
-    python -m benchmarks.speed [--quick] [--json FILE]
+    python -m benchmarks.speed [--quick] [--compile-time] [--package-python PYTHON] [--json FILE]
 
 Rows:
 
@@ -225,13 +225,11 @@ def memory_row(n):
     }
 
 
-def _process_time(code, env=None):
-    """Wall time of a new process running ``code``: until it prints its
-    first line (the result), and until it has exited."""
+def _process_time(code, env=None, python=sys.executable):
+    """Wall time of a new process of ``python`` running ``code``: until it
+    prints its first line (the result), and until it has exited."""
     start = time.perf_counter()
-    child = subprocess.Popen(
-        [sys.executable, "-c", code + "; print(flush=True)"], stdout=subprocess.PIPE, env=env
-    )
+    child = subprocess.Popen([python, "-c", code + "; print(flush=True)"], stdout=subprocess.PIPE, env=env)
     child.stdout.readline()
     result = time.perf_counter() - start
     if child.wait():
@@ -250,6 +248,17 @@ def _seconds_row(case, seconds, limit):
     }
 
 
+def _over_floor_row(case, seconds, floor):
+    return {
+        "case": case,
+        "ours": seconds,
+        "baseline": floor,
+        "ratio": seconds - floor,
+        "target": None,
+        "unit": "s over Numba's own start-up",
+    }
+
+
 # A one-line parallel kernel, cached on disk like proximity's: a new process
 # that imports NumPy and Numba and runs it pays for Numba's own start-up
 # (importing it, setting up its compiler, launching its threads) and little
@@ -264,11 +273,39 @@ def fill(out):
         out[i] = i
 """
 
+_FIRST_RESULTS = {
+    "first batch result (triangles, cache warm)": (
+        "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros((10, 3)))"
+    ),
+    "first single-point result (cache warm)": (
+        "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))"
+    ),
+    "first batch result (disks, cache warm)": (
+        "import numpy as np, proximity; "
+        "proximity.Disk(np.zeros(3), np.ones(3), 1).closest_point(np.zeros((10, 3)))"
+    ),
+}
 
-def startup_rows(repeats, compile_time=False):
+
+def _has_scipy(python):
+    """Whether scipy can be imported by ``python``'s environment."""
+    code = "import importlib.util, sys; sys.exit(importlib.util.find_spec('scipy') is None)"
+    return subprocess.run([python, "-c", code]).returncode == 0
+
+
+def startup_rows(repeats, compile_time=False, package_python=None):
     """Row 6: import time, first results with a warm cache, Numba's own
     start-up for comparison, and (optionally) the time to compile every
     kernel into an empty cache, which takes minutes.
+
+    ``package_python`` is an interpreter whose environment holds the package
+    and its dependencies alone (NumPy, Numba), as ``pip install proximity``
+    gives them; ``make bench`` makes one.  The limits apply to its rows.
+    Where this environment also holds scipy, as the benchmark's does for
+    trimesh, Numba imports ``scipy.linalg`` while it sets up its compiler;
+    its first results are printed beside Numba's own start-up in the same
+    environment.  Without ``package_python``, this environment's rows carry
+    the limits.
 
     ``import proximity`` is timed to the end of the process.  The first
     results are timed to the moment the child prints after its query, which
@@ -277,18 +314,11 @@ def startup_rows(repeats, compile_time=False):
     the whole command.  The commands take turns, one process each per
     round, so that a slow phase of the machine slows them all alike.
     """
-    first = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros((10, 3)))"
-    single = "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))"
-    disk = (
-        "import numpy as np, proximity; "
-        "proximity.Disk(np.zeros(3), np.ones(3), 1).closest_point(np.zeros((10, 3)))"
-    )
-    results = {
-        "new process, first batch result (triangles, cache warm)": first,
-        "new process, first single-point result (cache warm)": single,
-        "new process, first batch result (disks, cache warm)": disk,
-    }
-    floor_case = "new process, first result of a one-line cached Numba kernel (Numba's own start-up)"
+    pythons = {"package": package_python or sys.executable}
+    if package_python is not None:
+        if _has_scipy(package_python):
+            raise ValueError(f"{package_python} has scipy installed: not the package alone")
+        pythons["here"] = sys.executable
     with tempfile.TemporaryDirectory() as floor_dir:
         with open(os.path.join(floor_dir, "numba_floor.py"), "w", encoding="utf-8") as f:
             f.write(_FLOOR_MODULE)
@@ -296,27 +326,53 @@ def startup_rows(repeats, compile_time=False):
             f"import sys; sys.path.insert(0, {floor_dir!r}); "
             "import numpy as np, numba_floor; numba_floor.fill(np.zeros(10))"
         )
-        commands = {"import": "import proximity", **results, floor_case: floor}
-        for code in commands.values():
-            _process_time(code)  # warm the on-disk caches
-        times = {case: [] for case in commands}
+        commands = {("package", "import"): "import proximity"}
+        for where in pythons:
+            commands.update({(where, label): code for label, code in _FIRST_RESULTS.items()})
+            commands[where, "floor"] = floor
+        for (where, _), code in commands.items():
+            _process_time(code, python=pythons[where])  # warm the on-disk caches
+        times = {key: [] for key in commands}
         for _ in range(repeats):
-            for case, code in commands.items():
-                times[case].append(_process_time(code))
-    times = {case: np.array(t) for case, t in times.items()}
-    rows = [_seconds_row("python -c 'import proximity'", float(np.median(times["import"][:, 1])), 0.5)]
-    for case in results:
-        rows.append(_seconds_row(case, float(np.median(times[case][:, 0])), 1.0))
-    rows.append(_seconds_row(floor_case, float(np.median(times[floor_case][:, 0])), None))
-    exits = np.concatenate([times[case][:, 1] for case in results])
+            for (where, label), code in commands.items():
+                times[where, label].append(_process_time(code, python=pythons[where]))
+    first = {key: float(np.median([t[0] for t in ts])) for key, ts in times.items()}
+
+    alone = "" if package_python is None else "package alone: "
+    rows = [
+        _seconds_row(
+            f"{alone}python -c 'import proximity'",
+            float(np.median([t[1] for t in times["package", "import"]])),
+            0.5,
+        )
+    ]
+    rows += [
+        _seconds_row(f"{alone}new process, {label}", first["package", label], 1.0) for label in _FIRST_RESULTS
+    ]
     rows.append(
-        _seconds_row("the same three commands, to the end of the process", float(np.median(exits)), None)
+        _seconds_row(
+            f"{alone}new process, first result of a one-line cached Numba kernel (Numba's own start-up)",
+            first["package", "floor"],
+            None,
+        )
     )
+    exits = [t[1] for label in _FIRST_RESULTS for t in times["package", label]]
+    rows.append(
+        _seconds_row(
+            f"{alone}the same three commands, to the end of the process", float(np.median(exits)), None
+        )
+    )
+    if package_python is not None:
+        scipy = "with" if _has_scipy(sys.executable) else "without"
+        for label in _FIRST_RESULTS:
+            case = f"this environment ({scipy} scipy): new process, {label}"
+            rows.append(_over_floor_row(case, first["here", label], first["here", "floor"]))
     if not compile_time:
         return rows
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        code = first + "; " + single.split("; ", 1)[1] + "; " + disk.split("; ", 1)[1]
+        codes = list(_FIRST_RESULTS.values())
+        code = "; ".join([codes[0]] + [c.split("; ", 1)[1] for c in codes[1:]])
         seconds = _process_time(code, env)[0]
     rows.append(_seconds_row("first run ever: compile every kernel (empty cache)", seconds, None))
     return rows
@@ -344,6 +400,9 @@ def format_table(rows):
         elif unit.startswith("MB"):
             ours, base = f"{row['ours']:.0f} MB", f"{row['baseline']:.0f} MB allowed"
             ratio, target = f"+{row['ratio']:.1f} MB", "<= +64 MB"
+        elif unit.startswith("s over"):
+            ours, base = f"{row['ours']:.2f} s", f"Numba alone {row['baseline']:.2f} s"
+            ratio, target = f"{row['ratio']:+.2f} s", ""
         else:
             ours = f"{row['ours']:.2f} s"
             base = "" if row["baseline"] is None else f"limit {row['baseline']:g} s"
@@ -354,14 +413,14 @@ def format_table(rows):
     return "\n".join(lines)
 
 
-def run(quick=False, compile_time=False):
+def run(quick=False, compile_time=False, package_python=None):
     """Measure every row; ``quick`` shrinks the sizes for a smoke run."""
     n = 100_000 if quick else 1_000_000
     repeats = 3 if quick else REPEATS
     rows = triangle_rows(n, repeats) + round_rows(n, repeats)
     rows += loop_row(2_000 if quick else 20_000, repeats)
     rows.append(memory_row(1_000_000 if quick else 10_000_000))
-    rows += startup_rows(3 if quick else REPEATS, compile_time)
+    rows += startup_rows(3 if quick else REPEATS, compile_time, package_python)
     return rows
 
 
@@ -374,8 +433,13 @@ def main(argv=None):
         action="store_true",
         help="also time compiling every kernel into an empty cache (minutes)",
     )
+    parser.add_argument(
+        "--package-python",
+        metavar="PYTHON",
+        help="an interpreter with the package and its dependencies alone, for the start-up rows",
+    )
     args = parser.parse_args(argv)
-    rows = run(args.quick, args.compile_time)
+    rows = run(args.quick, args.compile_time, args.package_python)
     text = format_table(rows)
     repeats = 3 if args.quick else REPEATS
     header = (
