@@ -312,7 +312,9 @@ def startup_rows(repeats, compile_time=False, package_python=None):
     is what the one-second limit is about; the time to exit after it (when
     the interpreter tears down the compiler's modules) is printed too, for
     the whole command.  The commands take turns, one process each per
-    round, so that a slow phase of the machine slows them all alike.
+    round, so that a slow phase of the machine slows them all alike, and in
+    a new order each round (seeded), so that none always runs at the same
+    point of a round or right after the same other one.
     """
     pythons = {"package": package_python or sys.executable}
     if package_python is not None:
@@ -333,9 +335,11 @@ def startup_rows(repeats, compile_time=False, package_python=None):
         for (where, _), code in commands.items():
             _process_time(code, python=pythons[where])  # warm the on-disk caches
         times = {key: [] for key in commands}
+        keys, rng = list(commands), np.random.default_rng(0)
         for _ in range(repeats):
-            for (where, label), code in commands.items():
-                times[where, label].append(_process_time(code, python=pythons[where]))
+            for i in rng.permutation(len(keys)):
+                where, label = keys[i]
+                times[where, label].append(_process_time(commands[where, label], python=pythons[where]))
     first = {key: float(np.median([t[0] for t in ts])) for key, ts in times.items()}
 
     alone = "" if package_python is None else "package alone: "
