@@ -287,10 +287,14 @@ _FIRST_RESULTS = {
 }
 
 
-def _has_scipy(python):
-    """Whether scipy can be imported by ``python``'s environment."""
-    code = "import importlib.util, sys; sys.exit(importlib.util.find_spec('scipy') is None)"
-    return subprocess.run([python, "-c", code]).returncode == 0
+def _environment(python):
+    """Numba's version in ``python``'s environment, and whether it has scipy."""
+    code = (
+        "import numba; from importlib.util import find_spec; "
+        "print(numba.__version__, find_spec('scipy') is not None)"
+    )
+    out = subprocess.run([python, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    return out[0], out[1] == "True"
 
 
 def startup_rows(repeats, compile_time=False, package_python=None):
@@ -300,7 +304,8 @@ def startup_rows(repeats, compile_time=False, package_python=None):
 
     ``package_python`` is an interpreter whose environment holds the package
     and its dependencies alone (NumPy, Numba), as ``pip install proximity``
-    gives them; ``make bench`` makes one.  The limits apply to its rows.
+    gives them, with this environment's Numba; ``make bench`` makes one.
+    The limits apply to its rows.
     Where this environment also holds scipy, as the benchmark's does for
     trimesh, Numba imports ``scipy.linalg`` while it sets up its compiler;
     its first results are printed beside Numba's own start-up in the same
@@ -318,8 +323,13 @@ def startup_rows(repeats, compile_time=False, package_python=None):
     """
     pythons = {"package": package_python or sys.executable}
     if package_python is not None:
-        if _has_scipy(package_python):
+        numba_version, has_scipy = _environment(package_python)
+        if has_scipy:
             raise ValueError(f"{package_python} has scipy installed: not the package alone")
+        if numba_version != _environment(sys.executable)[0]:
+            # Each would find the other's cached kernels stale and compile
+            # them again, inside the timed first results.
+            raise ValueError(f"{package_python} has Numba {numba_version}, this environment another")
         pythons["here"] = sys.executable
     with tempfile.TemporaryDirectory() as floor_dir:
         with open(os.path.join(floor_dir, "numba_floor.py"), "w", encoding="utf-8") as f:
@@ -367,7 +377,7 @@ def startup_rows(repeats, compile_time=False, package_python=None):
         )
     )
     if package_python is not None:
-        scipy = "with" if _has_scipy(sys.executable) else "without"
+        scipy = "with" if _environment(sys.executable)[1] else "without"
         for label in _FIRST_RESULTS:
             case = f"this environment ({scipy} scipy): new process, {label}"
             rows.append(_over_floor_row(case, first["here", label], first["here", "floor"]))
