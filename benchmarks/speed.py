@@ -324,9 +324,10 @@ def startup_rows(repeats, compile_time=False, package_python=None):
     pythons = {"package": package_python or sys.executable}
     if package_python is not None:
         numba_version, has_scipy = _environment(package_python)
+        here_numba_version, here_has_scipy = _environment(sys.executable)
         if has_scipy:
             raise ValueError(f"{package_python} has scipy installed: not the package alone")
-        if numba_version != _environment(sys.executable)[0]:
+        if numba_version != here_numba_version:
             # Each would find the other's cached kernels stale and compile
             # them again, inside the timed first results.
             raise ValueError(f"{package_python} has Numba {numba_version}, this environment another")
@@ -377,7 +378,7 @@ def startup_rows(repeats, compile_time=False, package_python=None):
         )
     )
     if package_python is not None:
-        scipy = "with" if _environment(sys.executable)[1] else "without"
+        scipy = "with" if here_has_scipy else "without"
         for label in _FIRST_RESULTS:
             case = f"this environment ({scipy} scipy): new process, {label}"
             rows.append(_over_floor_row(case, first["here", label], first["here", "floor"]))
@@ -464,7 +465,6 @@ def main(argv=None):
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
-    return header + text
 
 
 def proximity_threads():
