@@ -9,21 +9,20 @@ rounded.
 
 import math
 
-from numba import njit
-
 from ._fp import fma, two_product, two_sum
+from ._jit import inline
 
 U = 2.0**-53
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def fast_two_sum(a, b):
     """``(s, e)`` with ``s + e == a + b`` exactly, provided ``|a| >= |b|`` or ``a == 0``."""
     s = a + b
     return s, b - (s - a)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def add(ah, al, bh, bl):
     """``a + b``; relative error below ``3 u^2`` (accurate double-double sum)."""
     s, e = two_sum(ah, bh)
@@ -34,13 +33,13 @@ def add(ah, al, bh, bl):
     return fast_two_sum(s, e)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def sub(ah, al, bh, bl):
     """``a - b``; as :func:`add`."""
     return add(ah, al, -bh, -bl)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def mul(ah, al, bh, bl):
     """``a * b``; relative error below ``7 u^2``."""
     p, e = two_product(ah, bh)
@@ -49,7 +48,7 @@ def mul(ah, al, bh, bl):
     return fast_two_sum(p, e)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def sqr(ah, al):
     """``a * a``; relative error below ``7 u^2``."""
     p, e = two_product(ah, ah)
@@ -57,7 +56,7 @@ def sqr(ah, al):
     return fast_two_sum(p, e)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def div(ah, al, bh, bl):
     """``a / b``; relative error below ``16 u^2`` for ``b != 0``."""
     q1 = ah / bh
@@ -71,7 +70,7 @@ def div(ah, al, bh, bl):
     return add(s, e, q3, 0.0)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def sqrt(ah, al):
     """``sqrt(a)`` for ``a >= 0``; relative error below ``8 u^2``."""
     if ah <= 0.0:
@@ -82,7 +81,7 @@ def sqrt(ah, al):
     return fast_two_sum(r, e / (2.0 * r))
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def diff(a, b):
     """``a - b`` of two floats, exactly, as a double-double."""
     return two_sum(a, -b)

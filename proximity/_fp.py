@@ -10,9 +10,10 @@ away from overflow and underflow without adding any rounding.
 import math
 
 from llvmlite import ir
-from numba import njit
 from numba.core import types
 from numba.extending import intrinsic
+
+from ._jit import inline
 
 EPS = 2.0**-52
 # Inside this window of the largest coordinate difference, no product of up
@@ -35,14 +36,14 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def two_product(a, b):
     """Return ``(p, e)`` with ``p = fl(a * b)`` and ``p + e == a * b`` exactly."""
     p = a * b
     return p, fma(a, b, -p)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def two_sum(a, b):
     """Return ``(s, e)`` with ``s = fl(a + b)`` and ``s + e == a + b`` exactly."""
     s = a + b
@@ -50,7 +51,7 @@ def two_sum(a, b):
     return s, (a - (s - bb)) + (b - bb)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def diff_of_products(a, b, c, d):
     """``a * b - c * d`` to within about one ulp (Kahan's algorithm).
 
@@ -63,7 +64,7 @@ def diff_of_products(a, b, c, d):
     return f + e
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def cross_accurate(ax, ay, az, bx, by, bz):
     """Cross product with each component correct to about one ulp."""
     return (
@@ -73,7 +74,7 @@ def cross_accurate(ax, ay, az, bx, by, bz):
     )
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def dot3_accurate(ax, ay, az, bx, by, bz):
     """Dot product of 3-vectors as if computed in twice the precision (Dot2)."""
     p, s = two_product(ax, bx)
@@ -86,7 +87,7 @@ def dot3_accurate(ax, ay, az, bx, by, bz):
     return p + s
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def pow2_scale(m):
     """Power-of-two factors ``(f1, f2)`` such that ``m * f1 * f2`` lies in [0.5, 1).
 
@@ -99,7 +100,7 @@ def pow2_scale(m):
     return math.ldexp(1.0, half), math.ldexp(1.0, -e - half)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
     # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.
     return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)

@@ -11,9 +11,10 @@ for; anything else is copied to contiguous memory first.
 """
 
 import numpy as np
-from numba import njit
 from numba.core import types
 from numpy.lib.stride_tricks import as_strided
+
+from ._jit import inline
 
 # The kernels are compiled once, for these types: inputs as read-only arrays
 # of any layout, outputs as flat C arrays.
@@ -25,11 +26,10 @@ OUT2 = types.Array(types.float64, 2, "C")
 OUT_FEATURE = types.Array(types.int8, 1, "C")
 OUT_FLAG = types.Array(types.boolean, 1, "C")
 
-# The one-query kernels' arguments: the output row, the method code, the
-# shape's values (read-only) and the point, in any layout.
-SINGLE_ARGS = (
+# The one-query kernels' signature: the output row, the shape's values
+# (read-only) and the point, in any layout.
+SINGLE_ARGS = types.void(
     OUT1,
-    types.int64,
     types.Array(types.float64, 1, "C", readonly=True),
     types.Array(types.float64, 1, "A"),
 )
@@ -42,10 +42,10 @@ def single_entry(kernel):
     versions on every call, which is a tenth of a fast-path query.  The
     entry point returned here skips that and reads its arguments as
     :data:`SINGLE_ARGS` without checking them, so the caller must pass
-    exactly those: a C-contiguous float64 row of ten, an int, the shape's
-    float64 values, and a float64 point of shape ``(3,)``.
+    exactly those: a C-contiguous float64 row of ten, the shape's float64
+    values, and a float64 point of shape ``(3,)``.
     """
-    return kernel.compile(SINGLE_ARGS)
+    return kernel.compile(SINGLE_ARGS.args)
 
 
 def loop_views(out_shape, inputs):
@@ -112,7 +112,7 @@ def single_shape(view):
 BLOCK = 128
 
 
-@njit(inline="always")
+@inline
 def _zero_tail(z, first, last, nb):
     # The columns past the last query of a short block are computed too.
     for row in range(first, last):
@@ -120,7 +120,7 @@ def _zero_tail(z, first, last, nb):
             z[row, q] = 0.0
 
 
-@njit(inline="always")
+@inline
 def gather_triangles(z, V, P, n_j, k0, nb):
     """Rows 0-11 of ``z``: the vertices ``V0, V1, V2`` and the point of
     queries ``k0 .. k0 + nb`` of an ``(I, J)`` loop, one query per column."""
@@ -150,7 +150,7 @@ def gather_triangles(z, V, P, n_j, k0, nb):
     _zero_tail(z, 0, 12, nb)
 
 
-@njit(inline="always")
+@inline
 def gather_points(z, first, P, n_j, k0, nb):
     """Rows ``first .. first + 2`` of ``z``: the points of queries
     ``k0 .. k0 + nb``, for the block functions of a single shape."""
@@ -170,7 +170,7 @@ def gather_points(z, first, P, n_j, k0, nb):
     _zero_tail(z, first, first + 3, nb)
 
 
-@njit(inline="always")
+@inline
 def gather_round(z, C, U, P, R, n_j, k0, nb):
     """Rows 0-9 of ``z``: center, unit normal, point and radius of queries
     ``k0 .. k0 + nb``, as :func:`gather_triangles`."""
@@ -200,7 +200,7 @@ def gather_round(z, C, U, P, R, n_j, k0, nb):
     _zero_tail(z, 0, 10, nb)
 
 
-@njit(inline="always")
+@inline
 def store(z, first, q, res):
     """Column ``q`` of rows ``first .. first + 8`` of ``z``: one query's nine results."""
     z[first, q], z[first + 1, q], z[first + 2, q] = res[0], res[1], res[2]
@@ -208,7 +208,7 @@ def store(z, first, q, res):
     z[first + 6, q], z[first + 7, q], z[first + 8, q] = res[6], res[7], res[8]
 
 
-@njit(inline="always")
+@inline
 def scatter_common(z, first, k0, nb, dist, sqr, point, feature, full):
     """Distance (always) and, with ``full``, squared distance, point and
     feature of queries ``k0 .. k0 + nb`` from rows ``first .. first + 5``."""
@@ -227,7 +227,7 @@ def scatter_common(z, first, k0, nb, dist, sqr, point, feature, full):
             f[q] = np.int8(z[first + 5, q])
 
 
-@njit(inline="always")
+@inline
 def scatter_triangles(z, first, k0, nb, dist, sqr, point, feature, bary, full):
     """:func:`scatter_common`, and the barycentrics from rows ``first + 6 ..``."""
     scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)
@@ -239,7 +239,7 @@ def scatter_triangles(z, first, k0, nb, dist, sqr, point, feature, bary, full):
             b[q, 2] = z[first + 8, q]
 
 
-@njit(inline="always")
+@inline
 def scatter_round(z, first, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full):
     """:func:`scatter_common`, and equidistant, height and radial from rows ``first + 6 ..``."""
     scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)

@@ -3,10 +3,9 @@
 A collection is a flat list of primitives, each a triangle, a disk or a
 circle, stored as one row of ``params`` and a ``kinds`` code.  The distance
 from a point to the collection is the minimum, over the primitives, of the
-per-primitive method's computed distance (:func:`point_triangle.robust`,
-:func:`point_triangle._eberly_query`, :func:`certified.triangle`,
-:func:`point_disk._any_query`), called with the same arguments as a
-single-shape query, so that a collection answers with exactly the bits the
+per-primitive method's computed distance (the per-method queries of
+``point_triangle.KERNELS`` and ``point_disk.KERNELS``), called with the same
+arguments as a single-shape query, so that a collection answers with exactly the bits the
 per-shape query gives for its nearest primitive.  Among primitives at the
 same computed distance the one with the lowest index wins; primitives whose
 method gives NaN (``eberly`` on a zero-area triangle) are passed over, and a
@@ -70,8 +69,8 @@ end to prune.  A point for which such a primitive could be the nearest is
 finished outside the kernel: every candidate within the bound is asked
 through the per-shape certified query, exact fallback included.
 
-The methods are dispatched by code in :func:`_triangle` and
-:func:`point_disk._any_query`: a new per-primitive method is one more line.
+The traversal is compiled per method (:func:`kernel`): the method's
+triangle and disk queries are bound into it, and nothing else is compiled.
 """
 
 import math
@@ -79,11 +78,12 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numba.core import types
 
 from . import certified, point_disk, point_triangle
 from ._fp import EPS
+from ._jit import inline, kernel, specialize
 from .results import Feature
 
 TRIANGLE = 0
@@ -108,64 +108,32 @@ _OUT_I64 = types.Array(types.int64, 1, "C")
 _OUT_B = types.Array(types.boolean, 1, "C")
 
 
-@njit(inline="always", error_model="numpy")
-def _triangle(method, q, k, px, py, pz):
-    """The per-triangle method with code ``method`` (``point_triangle.METHODS``).
-
-    Returns ``(status, distance, sqr_distance, x, y, z, feature, b0, b1, b2)``;
-    ``status`` is ``certified.EXACT`` where the certified filter leaves the
-    answer to its exact fallback.
-    """
-    if method == point_triangle.ROBUST:
-        d, sqr, x, y, z, f, b0, b1, b2 = point_triangle.robust(
-            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-        )
-        return certified.CERTAIN, d, sqr, x, y, z, f, b0, b1, b2
-    if method == point_triangle.CERTIFIED:
-        return certified.triangle(
-            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-        )
-    if method == point_triangle.EBERLY:
-        d, sqr, x, y, z, f, b0, b1, b2 = point_triangle._eberly_query(
-            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-        )
-        return certified.CERTAIN, d, sqr, x, y, z, int(f), b0, b1, b2
-    # A code this dispatch does not know: no answer, rather than another method's.
-    nan = math.nan
-    return certified.CERTAIN, nan, nan, nan, nan, nan, NONE, nan, nan, nan
+# Bound per method by :func:`proximity._jit.specialize`: the method's query
+# of one triangle and of one disk or circle, the primitive evaluation built
+# on them, and whether the method has an exact fallback.
+TRIANGLE_QUERY = ROUND_QUERY = EVALUATE = None
+EXACT_FALLBACK = False
 
 
-@njit(inline="always", error_model="numpy")
-def _evaluate(tri_method, round_method, kinds, q, k, px, py, pz):
+def _evaluate(kinds, q, k, px, py, pz):
     """Primitive ``k``'s answer: ``(status, d, sqr, x, y, z, feature, a0, a1, a2, equidistant)``.
 
     ``a`` is the barycentric triple for a triangle, ``(height, radial, NaN)``
     for a disk or a circle.
     """
     if kinds[k] == TRIANGLE:
-        st, d, sqr, x, y, z, f, b0, b1, b2 = _triangle(tri_method, q, k, px, py, pz)
+        st, d, sqr, x, y, z, f, b0, b1, b2 = TRIANGLE_QUERY(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )
         return st, d, sqr, x, y, z, f, b0, b1, b2, False
-    st, d, sqr, x, y, z, f, e, h, r = point_disk._any_query(
-        round_method,
-        kinds[k] == DISK,
-        q[k, 0],
-        q[k, 1],
-        q[k, 2],
-        q[k, 3],
-        q[k, 4],
-        q[k, 5],
-        q[k, 6],
-        q[k, 7],
-        q[k, 8],
-        q[k, 9],
-        px,
-        py,
-        pz,
-    )
+    st, d, sqr, x, y, z, f, e, h, r = ROUND_QUERY(
+        kinds[k] == DISK, q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5],
+        q[k, 6], q[k, 7], q[k, 8], q[k, 9], px, py, pz,
+    )  # fmt: skip
     return st, d, sqr, x, y, z, f, h, r, math.nan, e
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _interval(kinds, q, k, px, py, pz):
     """Bounds ``(lo, hi)`` on the certified distance from the robust one.
 
@@ -183,8 +151,7 @@ def _interval(kinds, q, k, px, py, pz):
             m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
         scale = 1.75 * m
     else:
-        d = point_disk._query(
-            point_disk.ROBUST,
+        d = point_disk.robust_query(
             kinds[k] == DISK,
             q[k, 0],
             q[k, 1],
@@ -199,14 +166,14 @@ def _interval(kinds, q, k, px, py, pz):
             px,
             py,
             pz,
-        )[0]
+        )[1]
         m = max(max(abs(q[k, 0] - px), abs(q[k, 1] - py)), abs(q[k, 2] - pz))
         scale = 1.75 * m + q[k, 9]
     w = 16.0 * EPS * scale
     return d - w, d + w
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _box_sqr(bounds, node, s, qx, qy, qz):
     # Squared distance from the scaled point to the scaled box: 0 inside.
     dx = max(max(bounds[node, 0] * s - qx, qx - bounds[node, 3] * s), 0.0)
@@ -215,7 +182,7 @@ def _box_sqr(bounds, node, s, qx, qy, qz):
     return dx * dx + dy * dy + dz * dz
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _bound_sqr(boxes, k, s, qx, qy, qz):
     """Squared lower bound on the distance from the scaled point to what box and slab ``k`` hold.
 
@@ -226,7 +193,7 @@ def _bound_sqr(boxes, k, s, qx, qy, qz):
     return max(_box_sqr(boxes, k, s, qx, qy, qz), h * h)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _culled(cull, k, s, qx, qy, qz, reach):
     """Whether stored primitive ``k`` is farther than ``reach`` (scaled) by its box or its slab.
 
@@ -238,7 +205,7 @@ def _culled(cull, k, s, qx, qy, qz, reach):
     return max(t - cull[k, 10] * s, cull[k, 9] * s - t) > reach
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _scale(px, py, pz, magnitude):
     """The power of two ``s`` that brings ``M`` (point and boxes) into ``[0.5, 1)``."""
     m = max(max(abs(px), abs(py)), max(abs(pz), magnitude))
@@ -246,8 +213,6 @@ def _scale(px, py, pz, magnitude):
 
 
 _QUERY_SIGNATURE = types.void(
-    types.int64,
-    types.int64,
     _C1B,
     _C2F,
     _C1I,
@@ -271,10 +236,7 @@ _QUERY_SIGNATURE = types.void(
 )
 
 
-@njit(_QUERY_SIGNATURE, parallel=True, cache=True, error_model="numpy")
 def _nearest(
-    tri_method,
-    round_method,
     kinds,
     params,
     index,
@@ -344,8 +306,15 @@ def _nearest(
                         for k in range(first, first + c):
                             if _culled(cull, k, s, qx, qy, qz, reach):
                                 continue
-                            r = _evaluate(tri_method, round_method, kinds, params, k, px, py, pz)
-                            if r[0] == certified.CERTAIN:
+                            r = EVALUATE(kinds, params, k, px, py, pz)
+                            certain = True
+                            if EXACT_FALLBACK:
+                                if r[0] != certified.CERTAIN:
+                                    certain = False
+                                    lo, hi = _interval(kinds, params, k, px, py, pz)
+                                    lowest = min(lowest, lo)
+                                    upper = min(upper, hi)
+                            if certain:
                                 d = r[1]
                                 idx = index[k]
                                 if d < best or (d == best and idx < best_index):
@@ -356,10 +325,6 @@ def _nearest(
                                     w_feature = r[6]
                                     w_a0, w_a1, w_a2 = r[7], r[8], r[9]
                                     w_flag = r[10]
-                            else:
-                                lo, hi = _interval(kinds, params, k, px, py, pz)
-                                lowest = min(lowest, lo)
-                                upper = min(upper, hi)
                             reach = min(best, upper) * s + SLACK
                             limit = reach * reach
                         node = -1
@@ -414,12 +379,8 @@ def _nearest(
                 prim[i] = best_index
 
 
-_GATHER_SIGNATURE = types.int64(
-    _C2F, _C2F, _C1I, _C1I, types.int64, types.float64, _C1F, types.float64, _OUT_I64
-)
 
-
-@njit(_GATHER_SIGNATURE, cache=True, error_model="numpy")
+@kernel()
 def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     """Stored primitives not culled at distance ``bound`` from ``p``, by the same tests as the search.
 
@@ -452,10 +413,9 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     return found
 
 
-_MORTON_SIGNATURE = types.int16[::1](_C2F)
 
 
-@njit(_MORTON_SIGNATURE, cache=True, error_model="numpy")
+@kernel()
 def _morton(points):
     """15-bit Morton codes of the points on a 32^3 grid over their finite bounding box.
 
@@ -488,10 +448,9 @@ def _morton(points):
     return codes
 
 
-_BUILD_SIGNATURE = types.Tuple((types.int64[:, ::1], types.int64[::1], types.int64))(_C2F, _C2F, types.int64)
 
 
-@njit(_BUILD_SIGNATURE, cache=True, error_model="numpy")
+@kernel()
 def _build(lo, hi, leaf_size):
     """Topology of a hierarchy over boxes ``lo``, ``hi`` (n, 3), n >= 1.
 
@@ -616,10 +575,9 @@ def _build(lo, hi, leaf_size):
     return nodes, order, depth
 
 
-_REFIT_SIGNATURE = types.float64[:, ::1](_C1I, _C1I, _C1B, _C2F, _C2F)
 
 
-@njit(_REFIT_SIGNATURE, cache=True, error_model="numpy")
+@kernel()
 def _refit(child, count, kinds, params, cull):
     """Node boxes and slabs ``(lo, hi, u, h_min, h_max)``, ``(m, 11)``, over the stored primitives.
 
@@ -897,14 +855,33 @@ def _visiting_order(points):
     return np.argsort(_morton(points), kind="stable")
 
 
-def nearest(tree, tri_method, round_method, points, full, loose=False):
+def query_kernel(method):
+    """The compiled traversal of ``method`` (a :class:`~proximity.methods.Method`)."""
+    name = method.name
+    evaluate = specialize(
+        _evaluate,
+        name,
+        inline=True,
+        TRIANGLE_QUERY=point_triangle.KERNELS[name][0],
+        ROUND_QUERY=point_disk.KERNELS[name][0],
+    )
+    return specialize(
+        _nearest,
+        name,
+        _QUERY_SIGNATURE,
+        parallel=True,
+        EVALUATE=evaluate,
+        EXACT_FALLBACK=method.exact_fallback,
+    )
+
+
+def nearest(tree, method, points, full, loose=False):
     """Nearest primitive to each of the validated points ``(n, 3)``.
 
     Parameters
     ----------
     tree : Tree
-    tri_method, round_method : int
-        Codes of ``point_triangle.METHODS`` and ``point_disk.METHODS``.
+    method : Method
     points : ndarray of float64, shape ``(n, 3)``
     full : bool
         Whether to fill every output or only ``distance``.
@@ -938,9 +915,7 @@ def nearest(tree, tri_method, round_method, points, full, loose=False):
     # a sphere is equidistant from every face), so blocks are handed out
     # one at a time rather than split evenly between threads up front.
     with numba.parallel_chunksize(1):
-        _nearest(
-            tri_method,
-            round_method,
+        query_kernel(method)(
             tree.kinds,
             tree.params,
             tree.index,

@@ -38,11 +38,12 @@ then the lowest index.
 import math
 
 import numpy as np
-from numba import literal_unroll, njit, uint64
+from numba import literal_unroll, uint64
 
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
+from ._jit import inline, kernel
 from ._loops import BLOCK, gather_triangles, scatter_triangles, store
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
@@ -58,26 +59,26 @@ CERTAIN = 0.0
 EXACT = 1.0
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _sign(value, bound):
     """+1 or -1 when ``|value| > bound``, else 0 (undecided)."""
     bound = bound * (1.0 + 1e-12) + SLACK
     return 1 if value > bound else (-1 if value < -bound else 0)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _both(s1, s2, want1, want2):
     """Three-valued AND of two signs: 1 true, 0 undecided, -1 false."""
     false = ((s1 != 0) & (s1 != want1)) | ((s2 != 0) & (s2 != want2))
     return -1 if false else (1 if (s1 == want1) & (s2 == want2) else 0)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _cross_abs(ax, ay, az, bx, by, bz):
     return ay * bz + az * by, az * bx + ax * bz, ax * by + ay * bx
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _faithful_sqrt(sh, sl, delta):
     """``(ok, r, s)``: ``r`` is ``sqrt(sh + sl)`` rounded to a float, ``ok``
     when ``r`` is faithful for every value within ``delta`` of ``sh + sl``;
@@ -97,7 +98,7 @@ def _faithful_sqrt(sh, sl, delta):
     return ok, r if positive else 0.0, sh + sl if positive else 0.0
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _sum_sq(xh, xl, yh, yl, zh, zl):
     """``x^2 + y^2 + z^2`` of double-doubles, with ``delta`` (no cancellation)."""
     s1h, s1l = dd.sqr(xh, xl)
@@ -110,7 +111,7 @@ def _sum_sq(xh, xl, yh, yl, zh, zl):
     return sh, sl, math.inf if underflow else 16.0 * U * U * abs(sh)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _cross_dd(ah, al, bh, bl, ch, cl, dh, dl):
     """``a * d - b * c`` of double-doubles, and a bound on its error."""
     p1h, p1l = dd.mul(ah, al, dh, dl)
@@ -119,7 +120,7 @@ def _cross_dd(ah, al, bh, bl, ch, cl, dh, dl):
     return rh, rl, 16.0 * U * U * (abs(p1h) + abs(p2h))
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
     """``(x, y, z) x (p, q, r)`` in double-double, with per-component bounds."""
     cxh, cxl, ex = _cross_dd(yh, yl, zh, zl, qh, ql, rh, rl)
@@ -128,7 +129,7 @@ def _cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
     return cxh, cxl, cyh, cyl, czh, czl, ex, ey, ez
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
     """``|c|^2`` of a double-double vector whose components err by ``e*``."""
     sh, sl, d = _sum_sq(xh, xl, yh, yl, zh, zl)
@@ -136,7 +137,7 @@ def _norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
     return sh, sl, d
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _ratio(nh, nl, dn, mh, ml, dm):
     """``n / m`` and its error bound, from the bounds of both."""
     qh, ql = dd.div(nh, nl, mh, ml)
@@ -144,7 +145,7 @@ def _ratio(nh, nl, dn, mh, ml, dm):
     return qh, ql, 2.0 * rel * abs(qh) if nh != 0.0 else math.inf
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _classify(ax, ay, az, bx, by, bz, cx, cy, cz, e0x, e0y, e0z, e1x, e1y, e1z, e2x, e2y, e2z):
     """The exact closest feature from float predicates, or NONE if undecided.
 
@@ -199,14 +200,14 @@ def _classify(ax, ay, az, bx, by, bz, cx, cy, cz, e0x, e0y, e0z, e1x, e1y, e1z, 
     return result
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _scale_exact(x, f1, f2):
     """``x * f1 * f2`` and whether that was exact (no underflow)."""
     y = x * f1 * f2
     return y, (y / f2) / f1 == x
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _dd_vec(x0, y0, z0, x1, y1, z1):
     """``(x1, y1, z1) - (x0, y0, z0)``, exactly, as three double-doubles."""
     xh, xl = dd.diff(x1, x0)
@@ -215,7 +216,7 @@ def _dd_vec(x0, y0, z0, x1, y1, z1):
     return xh, xl, yh, yl, zh, zl
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _scale_vec(v, f1, f2):
     """A double-double vector times ``f1 * f2``, and whether that was exact."""
     xh, o1 = _scale_exact(v[0], f1, f2)
@@ -227,7 +228,7 @@ def _scale_vec(v, f1, f2):
     return (xh, xl, yh, yl, zh, zl), o1 & o2 & o3 & o4 & o5 & o6
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _dot_bounded(v, vh_err, w):
     """``v . w`` of double-double vectors where ``v`` errs by ``vh_err``; ``(h, l, delta)``."""
     t1h, t1l = dd.mul(v[0], v[1], w[0], w[1])
@@ -239,7 +240,7 @@ def _dot_bounded(v, vh_err, w):
     return th, tl, delta + 16.0 * U * U * (abs(t1h) + abs(t2h) + abs(t3h))
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _sel(c, x, y):
     """Element-wise ``x if c else y`` of two double-double vectors."""
     return (
@@ -252,7 +253,7 @@ def _sel(c, x, y):
     )
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _vertex(a, b, c, feature):
     """The squared distance to the closest vertex, ``|X|^2``.
 
@@ -269,7 +270,7 @@ def _vertex(a, b, c, feature):
     return ok, r, s, x[0], x[2], x[4], b0, b1, b2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _edge(a, b, c, e0, e1, e2, feature):
     """:func:`_vertex` for the closest edge, from ``X`` along ``E``: ``|X x E|^2 / |E|^2``.
 
@@ -298,7 +299,7 @@ def _edge(a, b, c, e0, e1, e2, feature):
     return ok, r, s, ex, ey, ez, b0, b1, b2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _face(a, b, c, e0, e1, e2):
     """:func:`_vertex` for the face: ``d = |n . A| / |n|`` with ``n = E0 x E1``."""
     n = _cross3(e0[0], e0[1], e0[2], e0[3], e0[4], e0[5], e1[0], e1[1], e1[2], e1[3], e1[4], e1[5])
@@ -317,7 +318,7 @@ def _face(a, b, c, e0, e1, e2):
     return ok, r, s, q * fx, q * fy, q * fz, wa / w, wb / w, wc / w
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _classify_local(a, b, c, e0, e1, e2):
     """:func:`_classify` on the leading parts of the exact differences."""
     return _classify(
@@ -326,7 +327,7 @@ def _classify_local(a, b, c, e0, e1, e2):
     )  # fmt: skip
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _kind(feature):
     """0 for a vertex, 1 for an edge, 2 for the face, 3 for NONE (undecided)."""
     if feature == NONE:
@@ -336,7 +337,7 @@ def _kind(feature):
     return 2 if feature == FACE else 1
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Exact differences for :func:`_vertex`, :func:`_edge` and :func:`_face`, the largest ``|V - P|``,
     and whether all of them are in the safe window (and finite)."""
@@ -356,7 +357,7 @@ def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return a, b, c, e0, e1, e2, m, in_window
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Unscale by ``g``, make the point absolute (vertices exactly), and
     refuse a distance that became subnormal or infinite."""
@@ -370,7 +371,7 @@ def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _local_at(w, m):
     """The exact differences of the query in column ``m`` of ``w`` (rows 0-11
     as :func:`~._loops.gather_triangles`)."""
@@ -381,7 +382,7 @@ def _local_at(w, m):
     return a, b, c, e0, e1, e2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _store_at(w, m, part, feature):
     """A :func:`_vertex`-style result, finished, into rows 13-21 of ``w`` and its status into row 22."""
     ok, r, s, x, y, z, b0, b1, b2 = part
@@ -394,7 +395,7 @@ def _store_at(w, m, part, feature):
     w[22, m] = res[0]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel()
 def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
 
@@ -487,7 +488,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel()
 def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Certified point-triangle query for any finite input, or a request for
     the exact fallback.
@@ -534,7 +535,7 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return r if r[0] == CERTAIN else fail
 
 
-@njit(cache=True, error_model="numpy")
+@kernel()
 def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
     """Certified point-circle or point-disk query, or a request for the fallback.
 

@@ -32,23 +32,22 @@ Two methods:
 
 import math
 
-from numba import njit
-
 from ._fp import EPS, SAFE_MAX, SAFE_MIN, pow2_scale
+from ._jit import inline
 
 # The radial part is the difference of two vectors of length up to |D|; below
 # this multiple of eps * |D| its direction is rounding noise.
 AXIS_TOLERANCE = 8.0 * EPS
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def window(dx, dy, dz, r):
     """Largest of the differences and the radius, and whether it is in the safe window."""
     m = max(max(abs(dx), abs(dy)), max(abs(dz), r))
     return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def decompose_local(dx, dy, dz, ux, uy, uz):
     """Height and radial part of ``D = P - C``, for ``D`` in the safe window.
 
@@ -67,7 +66,7 @@ def decompose_local(dx, dy, dz, ux, uy, uz):
     return h, qx, qy, qz, q, on_axis
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
     """:func:`decompose_local` for any finite input, in a scaled frame.
 
@@ -92,7 +91,7 @@ def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
     return h, qx, qy, qz, q, on_axis, r, g
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis):
     """Unit vector from the center towards the closest rim point.
 
@@ -115,7 +114,7 @@ def rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis):
     )
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     """Closest rim point from a decomposition: ``(distance, sqr, x, y, z)``."""
     wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
@@ -124,7 +123,7 @@ def rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     return math.sqrt(sqr) * g, sqr * g * g, cx + radius * wx, cy + radius * wy, cz + radius * wz
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """Robust point-circle query for any finite input.
 
@@ -135,7 +134,7 @@ def circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     return d, sqr, x, y, z, on_axis, h * g, q * g
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
     """The seed's ``N`` (normalised as given) and ``Q - C``, as written."""
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
@@ -145,7 +144,7 @@ def seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
     return nx, ny, nz, h, qx, qy, qz, math.sqrt(qx * qx + qy * qy + qz * qz)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
     """Section 1 as written; same return as :func:`circle`."""
     nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)

@@ -14,10 +14,11 @@ always takes the rim branch.
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numba.core import types
 
-from . import _exact, _pool, certified
+from . import _exact, _pool, certified, methods
+from ._jit import inline, kernel, specialize
 from ._loops import (
     A_IN2,
     A_IN3,
@@ -30,6 +31,7 @@ from ._loops import (
     gather_round,
     loop_views,
     scatter_round,
+    single_entry,
     single_shape,
     store,
 )
@@ -40,13 +42,8 @@ NONE = int(Feature.NONE)
 FACE = int(Feature.FACE)
 RIM = int(Feature.RIM)
 
-EBERLY = 0
-ROBUST = 1
-CERTIFIED = 2
-METHODS = {"eberly": EBERLY, "robust": ROBUST, "certified": CERTIFIED}
 
-
-@njit(inline="always", error_model="numpy")
+@inline
 def _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     """Face or rim, from a decomposition; the query's full return tuple."""
     d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
@@ -55,7 +52,7 @@ def _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     return d, sqr, x, y, z, RIM, False, h * g, q * g
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """Robust point-disk query for any finite input.
 
@@ -66,7 +63,7 @@ def disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     return _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
     """Section 2 as written; same return as :func:`disk`."""
     nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
@@ -78,43 +75,65 @@ def seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
     return d, sqr, x, y, z, RIM, False, h, q
 
 
-@njit(inline="always", error_model="numpy")
-def _query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
-    """One query on the scalar path; ``(d, sqr, x, y, z, feature, equidistant, h, q)``."""
-    if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-        nan = math.nan
-        return nan, nan, nan, nan, nan, NONE, False, nan, nan
-    if method == ROBUST:
-        if is_disk:
-            return disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        d, sqr, x, y, z, e, h, q = circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        return d, sqr, x, y, z, RIM, e, h, q
+_NAN = math.nan
+_NAN_ROW = (certified.CERTAIN, _NAN, _NAN, _NAN, _NAN, _NAN, NONE, False, _NAN, _NAN)
+
+
+@inline
+def _finite(px, py, pz):
+    return math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+
+
+@inline
+def robust_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """The robust query on the scalar path:
+    ``(status, d, sqr, x, y, z, feature, equidistant, h, q)``, status always certain."""
+    if not _finite(px, py, pz):
+        return _NAN_ROW
     if is_disk:
-        return seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+        d, sqr, x, y, z, f, e, h, q = disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        return certified.CERTAIN, d, sqr, x, y, z, f, e, h, q
+    d, sqr, x, y, z, e, h, q = circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+    return certified.CERTAIN, d, sqr, x, y, z, RIM, e, h, q
+
+
+@inline
+def eberly_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """The seed's formula, as :func:`robust_query`."""
+    if not _finite(px, py, pz):
+        return _NAN_ROW
+    if is_disk:
+        d, sqr, x, y, z, f, e, h, q = seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+        return certified.CERTAIN, d, sqr, x, y, z, f, e, h, q
     d, sqr, x, y, z, e, h, q = seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
-    return d, sqr, x, y, z, RIM, e, h, q
+    return certified.CERTAIN, d, sqr, x, y, z, RIM, e, h, q
 
 
-@njit(inline="always", error_model="numpy")
-def _any_query(method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
-    """:func:`_query` for every method, with a leading status (certified only)."""
-    if method == CERTIFIED and math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-        return certified.round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
-    d, s, x, y, z, f, e, h, q = _query(
-        method, is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz
-    )
-    return certified.CERTAIN, d, s, x, y, z, f, e, h, q
+@inline
+def certified_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """The certified filter, as :func:`robust_query`; status ``EXACT`` where
+    the query needs the exact fallback."""
+    if not _finite(px, py, pz):
+        return _NAN_ROW
+    return certified.round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
 
 
-@njit(cache=True, error_model="numpy")
-def single(out, method, s, p):
+# Bound per method by :func:`proximity._jit.specialize`: the query of one
+# point, the block function of the batch loop, whether the block runs the
+# robust method's SIMD loop first, and whether the method has an exact fallback.
+QUERY = BLOCK_FN = None
+SIMD = EXACT_FALLBACK = False
+
+
+def _single(out, s, p):
     """One query, written to ``out[:9]``: the fast path for one point and one shape.
 
     ``s`` holds ``(is_disk, center, unit normal, normal, radius)`` flattened;
-    ``out[9]`` is set to 1 where the certified method needs its exact fallback.
+    ``out[9]`` is the status, non-zero where the certified method needs its
+    exact fallback.
     """
-    out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _any_query(
-        method, s[0] != 0.0, s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], p[0], p[1], p[2]
+    out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = QUERY(
+        s[0] != 0.0, s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], p[0], p[1], p[2]
     )
 
 
@@ -122,7 +141,7 @@ def _exact_query(is_disk, center, unit_normal, normal, radius, point):
     """The certified method's exact fallback for one query."""
     row = np.empty(10)
     args = np.concatenate([[float(is_disk)], center, unit_normal, normal, [radius]])
-    single(row, ROBUST, args, np.ascontiguousarray(point))
+    single_entry(single_kernel(methods.ROBUST))(row, args, np.ascontiguousarray(point))
     return _exact.round_shape(is_disk, center, normal, radius, point, row[2:5])
 
 
@@ -132,7 +151,7 @@ def exact_row(row, args, point):
     row[9] = 0.0
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """One query of the compiled loops' robust path, without branches:
     its nine results, and whether it was in the safe window (where they hold)."""
@@ -146,9 +165,7 @@ def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     return res, ok
 
 
-@njit(cache=True, error_model="numpy")
 def _block(
-    method,
     is_disk,
     C,
     U,
@@ -178,7 +195,7 @@ def _block(
     """
     z = np.empty((20, BLOCK))
     gather_round(z, C, U, P, R, n_j, k0, nb)
-    if method == ROBUST:
+    if SIMD:
         for q in range(BLOCK):
             res, ok = _robust_row(
                 is_disk,
@@ -204,19 +221,19 @@ def _block(
         k = k0 + q
         i = k // n_j
         j = k - i * n_j
-        cert = _any_query(
-            method, is_disk, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
+        cert = QUERY(
+            is_disk, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
             N[i, j, 0], N[i, j, 1], N[i, j, 2], z[9, q], z[6, q], z[7, q], z[8, q],
         )  # fmt: skip
-        if method == CERTIFIED:
+        if EXACT_FALLBACK:
             exact[k] = cert[0] != certified.CERTAIN
         store(z, 10, q, cert[1:])
     scatter_round(z, 10, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel()
 def _robust_block_one(
-    is_disk, C, U, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full
+    is_disk, C, U, N, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, exact, full
 ):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
@@ -243,15 +260,14 @@ def _robust_block_one(
     for q in range(nb):
         if z[12, q] == 0.0:
             # The robust method reads the unit normal only; it stands in for the normal as given.
-            res = _query(
-                ROBUST, is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q]
+            res = robust_query(
+                is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q]
             )
-            store(z, 3, q, res)
+            store(z, 3, q, res[1:])
     scatter_round(z, 3, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
-_SIGNATURE = types.void(
-    types.int64,
+_BATCH_SIGNATURE = types.void(
     types.boolean,
     A_IN3,
     A_IN3,
@@ -259,7 +275,6 @@ _SIGNATURE = types.void(
     A_IN2,
     A_IN3,
     types.int64,
-    types.boolean,
     OUT1,
     OUT1,
     OUT2,
@@ -272,33 +287,54 @@ _SIGNATURE = types.void(
 )
 
 
-@njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
-def _batch(
-    method, is_disk, C, U, N, R, P, n_j, one,
-    dist, sqr, point, feature, equidistant, height, radial, exact, full,
-):  # fmt: skip
+def _batch(is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, exact, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
-    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides; ``one`` says that they
-    repeat one shape.  With ``full=False`` only ``dist`` is written.  Blocks
-    of queries go to the threads, each handled by :func:`_block` or, for the
-    robust method and one shape, :func:`_robust_block_one`; the certified
-    method flags in ``exact`` the rows its filter could not decide.
+    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
+    only ``dist`` is written.  Blocks of queries go to the threads, each
+    handled by the method's block function; the certified method flags in
+    ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        if one and method == ROBUST:
-            _robust_block_one(
-                is_disk, C, U, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full
-            )
-        else:
-            _block(
-                method, is_disk, C, U, N, R, P, n_j, k0, nb,
-                dist, sqr, point, feature, equidistant, height, radial, exact, full,
-            )  # fmt: skip
+        BLOCK_FN(
+            is_disk, C, U, N, R, P, n_j, k0, nb,
+            dist, sqr, point, feature, equidistant, height, radial, exact, full,
+        )  # fmt: skip
+
+
+# Per method: the query of one point, whether it has a SIMD loop (robust),
+# whether it has an exact fallback, and a block function for many points
+# against one shape (or None: the general one).
+KERNELS = {
+    "robust": (robust_query, True, False, _robust_block_one),
+    "certified": (certified_query, False, True, None),
+    "eberly": (eberly_query, False, False, None),
+}
+
+
+def single_kernel(method):
+    """The one-query kernel of ``method`` (a :class:`~proximity.methods.Method`),
+    compiled for :data:`~proximity._loops.SINGLE_ARGS` by :func:`~proximity._loops.single_entry`."""
+    return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
+
+
+def block_kernel(method):
+    """The block function of ``method`` for pairs and all-pairs batches."""
+    query_, simd, exact_fallback, _ = KERNELS[method.name]
+    return specialize(_block, method.name, QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback)
+
+
+def batch_kernel(method, one):
+    """The compiled batch loop of ``method``; ``one``: every query is against one shape."""
+    block = KERNELS[method.name][3] if one else None
+    tag = "one" if block is not None else method.name
+    if block is None:
+        block = block_kernel(method)
+    return specialize(_batch, tag, _BATCH_SIGNATURE, parallel=True, BLOCK_FN=block)
 
 
 def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):
@@ -317,10 +353,10 @@ def query(method, is_disk, center, unit_normal, normal, radius, points, out_shap
         height=_pool.empty(m),
         radial=_pool.empty(m),
     )
-    exact = np.zeros(n if method == "certified" else 0, np.bool_)
+    exact = np.zeros(n if method.exact_fallback else 0, np.bool_)
     one = all(single_shape(view) for view in (C, U, R))
-    _batch(METHODS[method], is_disk, C, U, N, R, P, n_j, one, *out.values(), exact, full)
-    if method == "certified":
+    batch_kernel(method, one)(is_disk, C, U, N, R, P, n_j, *out.values(), exact, full)
+    if method.exact_fallback:
         rows = np.flatnonzero(exact)
         for k in rows:
             i, j = divmod(int(k), n_j)

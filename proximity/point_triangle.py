@@ -53,11 +53,12 @@ embedded in the ``z = 0`` plane, which changes no distance.
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numba.core import types
 
 from . import _exact, _pool, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
+from ._jit import inline, kernel, specialize
 from ._loops import (
     A_IN3,
     A_IN4,
@@ -82,13 +83,8 @@ F_NONE, F_FACE = float(NONE), float(FACE)
 F_VERTEX0, F_VERTEX1, F_VERTEX2 = float(VERTEX0), float(VERTEX1), float(VERTEX2)
 F_EDGE01, F_EDGE12, F_EDGE20 = float(EDGE01), float(EDGE12), float(EDGE20)
 
-EBERLY = 0
-ROBUST = 1
-CERTIFIED = 2
-METHODS = {"eberly": EBERLY, "robust": ROBUST, "certified": CERTIFIED}
 
-
-@njit(cache=True, error_model="numpy")
+@kernel()
 def eberly(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     """Listings 1-8 of the seed, for ``T(s, t) = B + s E0 + t E1``.
 
@@ -203,7 +199,7 @@ def eberly(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     return s, t, _boundary_feature(s, t)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def eberly_select(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     """:func:`eberly` with its branches turned into selects, for SIMD loops.
 
@@ -227,7 +223,7 @@ def eberly_select(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     return eberly_choice(a, b, c, d, e)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def eberly_terms(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     """The quadratic's coefficients ``a, b, c, d, e`` (Listing 1)."""
     dx = bx - px
@@ -241,7 +237,7 @@ def eberly_terms(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     return a, b, c, d, e
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def eberly_choice(a, b, c, d, e):
     """The region, the clamps and the feature of :func:`eberly_select`,
     from the coefficients: ``(s, t, feature code)``."""
@@ -321,7 +317,7 @@ def eberly_choice(a, b, c, d, e):
     return s_out, t_out, f
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _boundary_feature(s, t):
     # The listings leave (s, t) on an edge of the domain; name that edge, or
     # the vertex where the clamp put it.
@@ -338,7 +334,7 @@ def _boundary_feature(s, t):
     return EDGE12
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _segment(ax, ay, az, ex, ey, ez, bx, by, bz):
     """Closest point to the origin on the segment from ``a`` to ``b = a + e``.
 
@@ -360,7 +356,7 @@ def _segment(ax, ay, az, ex, ey, ez, bx, by, bz):
     return x * x + y * y + z * z, x, y, z, t
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     """The robust minimisation on vertices relative to ``P``, in the safe window.
 
@@ -414,7 +410,7 @@ def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     return math.sqrt(best), best, x, y, z, feature, b0, b1, b2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Undo the scaling ``g`` and make the closest point absolute.
 
@@ -433,7 +429,7 @@ def _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return dist * g, sqr * g * g, x, y, z, feature, b0, b1, b2
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _window(ax, ay, az, bx, by, bz, cx, cy, cz):
     """Largest difference, and whether it is inside the safe window."""
     m = max(
@@ -443,7 +439,7 @@ def _window(ax, ay, az, bx, by, bz, cx, cy, cz):
     return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel()
 def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Robust point-triangle query for any finite input; see the module docstring.
 
@@ -476,7 +472,7 @@ def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """The seed's method with the closest point and distance formed as in its source."""
     e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
@@ -485,7 +481,7 @@ def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return _eberly_point(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz, s, t, feature)
 
 
-@njit(inline="always", error_model="numpy")
+@inline
 def _eberly_point(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz, s, t, feature):
     """The result row of :func:`_eberly_query`, given the parameters ``s, t``."""
     e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
@@ -497,28 +493,39 @@ def _eberly_point(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz, s, t,
     return math.sqrt(sqr), sqr, x, y, z, feature, 1.0 - s - t, s, t
 
 
-@njit(cache=True, error_model="numpy")
-def single(out, method, v, p):
+@inline
+def robust_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """:func:`robust` with the leading status of the per-method queries (always certain)."""
+    d, sqr, x, y, z, f, b0, b1, b2 = robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+    return certified.CERTAIN, d, sqr, x, y, z, f, b0, b1, b2
+
+
+@inline
+def eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
+    """:func:`_eberly_query` with the leading status of the per-method queries."""
+    d, sqr, x, y, z, f, b0, b1, b2 = _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+    return certified.CERTAIN, d, sqr, x, y, z, int(f), b0, b1, b2
+
+
+# Bound per method by :func:`proximity._jit.specialize`: the query of one
+# point (``QUERY``) and the block function of the batch loop (``BLOCK_FN``).
+QUERY = BLOCK_FN = None
+
+
+def _single(out, v, p):
     """One query, written to ``out[:9]``: the fast path for one point and one shape.
 
     ``v`` holds the nine vertex coordinates and ``p`` the point; ``out[9]``
-    is set to 1 where the certified method needs its exact fallback.
+    is the status, non-zero where the certified method needs its exact
+    fallback.
     """
     px, py, pz = p[0], p[1], p[2]
-    out[9] = 0.0
     if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
-        out[:9] = math.nan
+        out[:] = math.nan
         out[5] = NONE
-    elif method == ROBUST:
-        out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = robust(
-            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
-        )
-    elif method == CERTIFIED:
-        out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = certified.triangle(
-            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
-        )
+        out[9] = 0.0
     else:
-        out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = _eberly_query(
+        out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8] = QUERY(
             v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], px, py, pz
         )
 
@@ -532,8 +539,8 @@ def exact_row(row, vertices, point):
 _NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
 
 
-@njit(cache=True, error_model="numpy")
-def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+@kernel()
+def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
     Gathered into local scratch (rows 0-11 of ``z``), computed by a loop that
@@ -569,8 +576,8 @@ def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@njit(cache=True, error_model="numpy")
-def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+@kernel()
+def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """:func:`_robust_block` for the seed's method: rows with a non-finite
     point are the only ones it leaves, and get NaN.
 
@@ -604,8 +611,8 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@njit(cache=True, error_model="numpy")
-def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
+@kernel()
+def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """:func:`_eberly_block` for a batch against one triangle, ``V[0, 0]``.
 
     Only the points are gathered (rows 0-2).  The loop reads the vertices as
@@ -628,52 +635,50 @@ def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full):
     scatter_triangles(z, 3, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-_SIGNATURE = types.void(
-    types.int64,
-    A_IN4,
-    A_IN3,
-    types.int64,
-    types.boolean,
-    OUT1,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT2,
-    OUT_FLAG,
-    types.boolean,
+# Per method: the query of one point, and the block functions of the batch
+# loop for pairs and for many points against one triangle.
+KERNELS = {
+    "robust": (robust_query, _robust_block, _robust_block),
+    "certified": (certified.triangle, certified.triangle_block, certified.triangle_block),
+    "eberly": (eberly_query, _eberly_block, _eberly_block_one),
+}
+
+_BATCH_SIGNATURE = types.void(
+    A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
 )
 
 
-@njit(_SIGNATURE, parallel=True, cache=True, error_model="numpy")
-def _batch(method, V, P, n_j, one, dist, sqr, point, feature, bary, exact, full):
+def _batch(V, P, n_j, dist, sqr, point, feature, bary, exact, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
     (zero along broadcast dimensions); output row ``k`` is loop index
-    ``(k // J, k % J)``, and ``one`` says that ``V`` repeats one triangle.
-    With ``full=False`` only ``dist`` is written and the other outputs may
-    be empty.  Blocks of queries go to the threads, each
-    handled by its method's block function (:func:`_robust_block`,
-    :func:`_eberly_block` or, for one triangle, :func:`_eberly_block_one`,
-    or :func:`certified.triangle_block`); the certified
-    method flags in ``exact`` the rows its filter could not decide.
+    ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and
+    the other outputs may be empty.  Blocks of queries go to the threads,
+    each handled by the method's block function; the certified method flags
+    in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        if method == ROBUST:
-            _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
-        elif method == CERTIFIED:
-            certified.triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
-        elif one:
-            _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
-        else:
-            _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, full)
+        BLOCK_FN(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
+
+
+def single_kernel(method):
+    """The one-query kernel of ``method`` (a :class:`~proximity.methods.Method`),
+    compiled for :data:`~proximity._loops.SINGLE_ARGS` by :func:`~proximity._loops.single_entry`."""
+    return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
+
+
+def batch_kernel(method, one):
+    """The compiled batch loop of ``method``; ``one``: every query is against one triangle."""
+    block = KERNELS[method.name][2 if one else 1]
+    return specialize(_batch, block.py_func.__name__, _BATCH_SIGNATURE, parallel=True, BLOCK_FN=block)
 
 
 def query(method, vertices, points, out_shape, full):
-    """Run the batch kernel; inputs are validated float64 3D arrays."""
+    """Run the batch kernel of ``method``; inputs are validated float64 3D arrays."""
     (V, P), n_j = loop_views(out_shape, [(vertices, 2), (points, 1)])
     n = V.shape[0] * V.shape[1]
     m = n if full else 0
@@ -684,9 +689,9 @@ def query(method, vertices, points, out_shape, full):
         feature=_pool.empty(m, np.int8),
         barycentric=_pool.empty((m, 3)),
     )
-    exact = np.zeros(n if method == "certified" else 0, np.bool_)
-    _batch(METHODS[method], V, P, n_j, single_shape(V), *out.values(), exact, full)
-    if method == "certified":
+    exact = np.zeros(n if method.exact_fallback else 0, np.bool_)
+    batch_kernel(method, single_shape(V))(V, P, n_j, *out.values(), exact, full)
+    if method.exact_fallback:
         rows = np.flatnonzero(exact)
         for k in rows:
             i, j = divmod(int(k), n_j)

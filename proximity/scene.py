@@ -14,6 +14,7 @@ primitive for small scenes, a bounding-volume hierarchy above
 import numpy as np
 
 from ._validate import as_float64
+from .methods import resolve
 from .results import SceneResult
 from .shapes import DEFAULT_METHOD, Circle, Disk, Triangle
 
@@ -29,11 +30,6 @@ BROAD_PHASES = ("auto", "brute", "bvh")
 #: 10-20% up to n = 12 and by a factor 2 at n = 128, because it tests the
 #: primitives nearest the point first and so skips more of the others.
 BRUTE_FORCE_MAX = 4
-
-#: Methods whose closest point on a circle may leave the circle's box (the
-#: seed's rim direction near the axis); the hierarchy bounds circles by the
-#: cube ``C +- R`` for them.
-_LOOSE_METHODS = ("eberly",)
 
 _KIND_NAMES = ("triangle", "disk", "circle")
 
@@ -69,22 +65,19 @@ class _Nearest:
         return broad_phase, tree
 
     def _query(self, points, method, full):
-        if method not in self.methods:
-            raise ValueError(f"method must be one of {self.methods}; got {method!r}")
+        method = resolve(method)
+        if method.name not in self.methods:
+            raise ValueError(f"method must be one of {self.methods}; got {method.name!r}")
         points = as_float64(points, "points", "(..., 3)")
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
-        from . import bvh, point_disk, point_triangle
+        from . import bvh
 
         out_shape = points.shape[:-1]
-        out = bvh.nearest(
-            self._tree,
-            point_triangle.METHODS.get(method, -1),
-            point_disk.METHODS.get(method, -1),
-            points.reshape(-1, 3),
-            full,
-            loose=self._has_circles and method in _LOOSE_METHODS,
-        )
+        # A method's closest point on a circle may leave the circle's box
+        # (``Method.loose``); the hierarchy then bounds circles by the cube C +- R.
+        loose = self._has_circles and method.loose
+        out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
         return out_shape, out
 
     def distance(self, points, *, method=DEFAULT_METHOD):

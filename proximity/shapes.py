@@ -6,13 +6,13 @@ The kernels are imported on first use, so that ``import proximity`` does not
 pay for loading the compiler.
 """
 
-import importlib
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from . import _counts
 from ._validate import as_float64, broadcast_batch, frozen, require_finite
+from .methods import DEFAULT, REGISTRY, resolve
 from .results import (
     CircleResult,
     DiskResult,
@@ -23,11 +23,9 @@ from .results import (
     triangle_from_row,
 )
 
-DEFAULT_METHOD = "robust"
+DEFAULT_METHOD = DEFAULT
 _FLOAT64 = np.dtype(np.float64)
 _POINT = (3,)
-_METHOD_CODES = {"eberly": 0, "robust": 1, "certified": 2}
-_CERTIFIED = _METHOD_CODES["certified"]
 _empty = np.empty
 
 
@@ -60,7 +58,7 @@ class _Facade:
     """Shared query plumbing: points, method and output shape."""
 
     __slots__ = ()
-    methods = tuple(_METHOD_CODES)
+    methods = tuple(REGISTRY)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable")
@@ -70,8 +68,7 @@ class _Facade:
             object.__setattr__(self, name, value)
 
     def _prepare(self, points, method):
-        if method not in self.methods:
-            raise ValueError(f"method must be one of {self.methods}; got {method!r}")
+        method = resolve(method)
         expected = f"(..., {self.dim})"
         points = as_float64(points, "points", expected)
         if points.ndim == 0 or points.shape[-1] != self.dim:
@@ -80,7 +77,7 @@ class _Facade:
             [("points", points.shape[:-1]), (type(self).__name__.lower(), self.batch_shape)],
             "the batch dimensions of points and shape",
         )
-        return points, out_shape
+        return method, points, out_shape
 
     def _single(self, points, method):
         """The fast path: a row of nine values for one 3D point against a
@@ -91,10 +88,7 @@ class _Facade:
         skips validation of the shape (done at construction), broadcasting
         and the batch kernel's thread launch.
         """
-        if self._args is None:
-            return None
-        code = _METHOD_CODES.get(method)
-        if code is None:
+        if self._args is None or type(method) is not str or method not in REGISTRY:
             return None
         if type(points) is not np.ndarray or points.dtype is not _FLOAT64:
             try:
@@ -103,27 +97,29 @@ class _Facade:
                 return None  # the batch path explains what is wrong with the input
         if points.shape != (3,):
             return None
-        kernel = self._single_kernel
-        if kernel is None:
-            from ._loops import single_entry  # loads the compiler, as the kernels do
-
-            kernel = single_entry(importlib.import_module(self._kernel_module).single)
-            # A built-in function does not bind as a method; staticmethod
-            # says so, and keeps it that way should the kernel change.
-            type(self)._single_kernel = staticmethod(kernel)
+        entry = self._entries.get(method)
+        if entry is None:
+            entry = self._entries[method] = self._compile_single(REGISTRY[method])
+        kernel, exact_fallback = entry
         row = np.empty(10)
-        kernel(row, code, self._args, points)
-        if code == _CERTIFIED:
+        kernel(row, self._args, points)
+        if exact_fallback:
             self._certified_row(row, points)
         row.setflags(write=False)
         return row
+
+    def _compile_single(self, method):
+        """The one-query kernel of ``method``, as an entry point that skips Numba's dispatch."""
+        from ._loops import single_entry  # loads the compiler, as the kernels do
+
+        return single_entry(self._kernels().single_kernel(method)), method.exact_fallback
 
     def _certified_row(self, row, point):
         """Count a certified fast-path query, and finish it exactly if its
         filter left it undecided."""
         undecided = bool(row[9])
         if undecided:
-            importlib.import_module(self._kernel_module).exact_row(row, self._args, point)
+            self._kernels().exact_row(row, self._args, point)
         _counts.count(1, int(undecided))
 
     def distance(self, points, *, method=DEFAULT_METHOD):
@@ -141,14 +137,14 @@ class _Facade:
         # out, because at a few microseconds a call every lookup counts.
         if type(points) is np.ndarray and points.shape == _POINT and points.dtype is _FLOAT64:
             args = self._args
-            code = _METHOD_CODES.get(method)
-            kernel = self._single_kernel
-            if args is not None and code is not None and kernel is not None:
+            entry = self._entries.get(method) if type(method) is str else None
+            if args is not None and entry is not None:
+                kernel, exact_fallback = entry
                 row = _empty(10)
-                kernel(row, code, args, points)
-                if code == _CERTIFIED:
+                kernel(row, args, points)
+                if exact_fallback:
                     self._certified_row(row, points)
-                row.setflags(False)  # write=False, passed positionally: 60 ns less
+                row.setflags(False)
                 return self._from_row(row)
         row = self._single(points, method)
         if row is not None:
@@ -205,17 +201,20 @@ class Triangle(_Facade):
             _args=v3.ravel() if single else None,
         )
 
-    _kernel_module = "proximity.point_triangle"
-    _single_kernel = None  # loaded on first use
+    _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
+
+    @staticmethod
+    def _kernels():
+        from . import point_triangle
+
+        return point_triangle
 
     def __repr__(self):
         return f"Triangle(batch_shape={self.batch_shape}, dim={self.dim})"
 
     def _query(self, points, method, full):
-        from . import point_triangle
-
-        points, out_shape = self._prepare(points, method)
-        return out_shape, point_triangle.query(method, self._vertices3, _to_3d(points), out_shape, full)
+        method, points, out_shape = self._prepare(points, method)
+        return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
 
 
 class _Round(_Facade):
@@ -223,8 +222,13 @@ class _Round(_Facade):
     dim = 3
     _is_disk = False
 
-    _kernel_module = "proximity.point_disk"
-    _single_kernel = None  # loaded on first use
+    _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
+
+    @staticmethod
+    def _kernels():
+        from . import point_disk
+
+        return point_disk
 
     def __init__(self, center, normal, radius):
         c = as_float64(center, "center", "(..., 3)")
@@ -262,10 +266,8 @@ class _Round(_Facade):
         return f"{type(self).__name__}(batch_shape={self.batch_shape})"
 
     def _query(self, points, method, full):
-        from . import point_disk
-
-        points, out_shape = self._prepare(points, method)
-        out = point_disk.query(
+        method, points, out_shape = self._prepare(points, method)
+        out = self._kernels().query(
             method,
             self._is_disk,
             self.center,

@@ -1,0 +1,113 @@
+"""How the kernels are compiled: inlining, the disk cache, and specialisation.
+
+Two decorators and one function, used by every kernel module:
+
+``inline``
+    A helper inlined by LLVM into its callers (``forceinline``).  Numba
+    compiles it once per signature; inlining at Numba's IR level instead
+    would run its front end again at every call site.
+``kernel``
+    A compiled function that is cached on disk, where a cache can be kept
+    (see :data:`CACHE`).
+:func:`specialize`
+    A kernel written once and compiled per method: its body refers to
+    upper-case global names (``QUERY``, ``BLOCK_FN``, ...) that
+    :func:`specialize` binds to one method's functions in a copy of the
+    function.  A comparison of such a constant is folded before typing, so
+    a specialised kernel compiles only the code of its method.  Nothing is
+    compiled before the first call that needs it.
+
+The cache sits next to the sources (Numba's default).  Where that directory
+cannot be written (a read-only install), Numba's user-wide cache directory
+is used, or ``NUMBA_CACHE_DIR`` when it is set; where none can be written,
+kernels are compiled in memory at every start, with a warning.
+"""
+
+import os
+import tempfile
+import threading
+import types
+import warnings
+
+from numba import njit
+from numba.misc.appdirs import user_cache_dir
+
+_OPTIONS = {"error_model": "numpy"}
+
+
+def _writable(directory):
+    """Whether files can be created in ``directory`` (made if missing)."""
+    try:
+        os.makedirs(directory, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _cache_usable():
+    configured = os.environ.get("NUMBA_CACHE_DIR")
+    if configured:
+        return _writable(configured)
+    here = os.path.dirname(os.path.abspath(__file__))
+    return _writable(os.path.join(here, "__pycache__")) or _writable(
+        user_cache_dir(appname="numba", appauthor=False)
+    )
+
+
+#: Whether compiled kernels are kept on disk.
+CACHE = _cache_usable()
+if not CACHE:
+    warnings.warn(
+        "proximity: no writable cache directory (the package's, the user cache or NUMBA_CACHE_DIR); "
+        "kernels will be compiled again in every process",
+        RuntimeWarning,
+        stacklevel=2,
+    )
+
+
+def inline(func):
+    """A helper compiled into its callers by LLVM."""
+    return njit(forceinline=True, **_OPTIONS)(func)
+
+
+def kernel(*signature, parallel=False):
+    """A kernel, cached on disk where possible; compiled at its first call,
+    or at once when a ``signature`` is given."""
+    return njit(*signature, parallel=parallel, cache=CACHE, **_OPTIONS)
+
+
+_specialised = {}
+_lock = threading.Lock()
+
+
+def specialize(func, tag, signature=None, parallel=False, inline=False, **bindings):
+    """The kernel ``func`` with the global names ``bindings`` bound, compiled
+    for ``signature`` (lazily without one); with ``inline``, a helper that
+    LLVM inlines into its callers, never cached on its own.
+
+    ``tag`` names the specialisation: it is part of the cached kernel's file
+    name, so every distinct set of ``bindings`` of one ``func`` needs its own.
+    Repeated calls return the same kernel.
+    """
+    key = (func, tag)
+    kernel_ = _specialised.get(key)
+    if kernel_ is not None:
+        return kernel_
+    with _lock:
+        kernel_ = _specialised.get(key)
+        if kernel_ is None:
+            namespace = dict(func.__globals__)
+            namespace.update(bindings)
+            copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__)
+            copy.__qualname__ = f"{func.__qualname__}__{tag}"
+            copy.__doc__ = func.__doc__
+            copy.__module__ = func.__module__
+            args = (signature,) if signature is not None else ()
+            if inline:
+                kernel_ = njit(*args, forceinline=True, **_OPTIONS)(copy)
+            else:
+                kernel_ = njit(*args, parallel=parallel, cache=CACHE, **_OPTIONS)(copy)
+            _specialised[key] = kernel_
+    return kernel_
