@@ -4,7 +4,7 @@ Every ratio is measured in one run, on the same inputs, from medians of at
 least five repeats (three rounds of five for the batch rows); nothing is
 compared with a number from another run.
 
-    python -m benchmarks.speed [--quick] [--compile-time] [--package-python PYTHON] [--json FILE]
+    python -m benchmarks.speed [--quick] [--package-python PYTHON] [--json FILE]
 
 Rows:
 
@@ -22,9 +22,12 @@ Rows:
    outputs plus 64 MB.
 6. Start-up: ``import proximity``, and a new process's first result with the
    compiled kernels cached on disk, beside the first result of a one-line
-   cached Numba kernel (Numba's own start-up, the floor under ours); with
-   ``--compile-time``, also the first run ever, which compiles every kernel
-   into an empty cache.
+   cached Numba kernel (Numba's own start-up, the floor under ours).
+7. Cold start: a new process with an empty cache directory, as after a
+   fresh install: the first single-point result (at most 3 s), the first
+   batch result of every shape and method (at most 6 s each), and the CPU
+   time of ``python -m proximity.compile``, which compiles every kernel (at
+   most 45 s).
 """
 
 import argparse
@@ -297,10 +300,9 @@ def _environment(python):
     return out[0], out[1] == "True"
 
 
-def startup_rows(repeats, compile_time=False, package_python=None):
-    """Row 6: import time, first results with a warm cache, Numba's own
-    start-up for comparison, and (optionally) the time to compile every
-    kernel into an empty cache, which takes minutes.
+def startup_rows(repeats, package_python=None):
+    """Row 6: import time, first results with a warm cache, and Numba's own
+    start-up for comparison.
 
     ``package_python`` is an interpreter whose environment holds the package
     and its dependencies alone (NumPy, Numba), as ``pip install proximity``
@@ -382,14 +384,57 @@ def startup_rows(repeats, compile_time=False, package_python=None):
         for label in _FIRST_RESULTS:
             case = f"this environment ({scipy} scipy): new process, {label}"
             rows.append(_over_floor_row(case, first["here", label], first["here", "floor"]))
-    if not compile_time:
-        return rows
+    return rows
+
+
+_COLD_SHAPES = {
+    "triangles, pairs": "proximity.Triangle(np.eye(3) + np.zeros((10, 1, 1)))",
+    "one disk": "proximity.Disk(np.zeros(3), np.ones(3), 1.0)",
+    "circles, pairs": "proximity.Circle(np.zeros((10, 3)), np.ones(3), 1.0)",
+    "mesh": "proximity.TriangleMesh(np.eye(3), [[0, 1, 2]])",
+}
+
+
+def _cold(code, python=sys.executable):
+    """``(wall seconds to the first result, CPU seconds to the end)`` of a new
+    process running ``code`` with an empty cache directory."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        codes = list(_FIRST_RESULTS.values())
-        code = "; ".join([codes[0]] + [c.split("; ", 1)[1] for c in codes[1:]])
-        seconds = _process_time(code, env)[0]
-    rows.append(_seconds_row("first run ever: compile every kernel (empty cache)", seconds, None))
+        before = os.times()
+        wall, _ = _process_time(code, env, python)
+        after = os.times()
+    return wall, (after.children_user - before.children_user) + (
+        after.children_system - before.children_system
+    )
+
+
+def cold_rows(quick=False, python=sys.executable):
+    """Row 7: first results and compiling everything, each in a new process
+    with an empty cache; one run each (each takes seconds)."""
+    rows = [
+        _seconds_row(
+            "empty cache: first single-point result (triangle)",
+            _cold(
+                "import numpy as np, proximity; proximity.Triangle(np.eye(3)).closest_point(np.zeros(3))",
+                python,
+            )[0],
+            3.0,
+        )
+    ]
+    methods = ["robust"] if quick else list(proximity.methods.REGISTRY)
+    for method in methods:
+        for label, shape in _COLD_SHAPES.items():
+            code = (
+                f"import numpy as np, proximity; {shape}.closest_point(np.zeros((10, 3)), method={method!r})"
+            )
+            rows.append(
+                _seconds_row(
+                    f"empty cache: first batch result ({label}, {method})", _cold(code, python)[0], 6.0
+                )
+            )
+    if not quick:
+        cpu = _cold("import proximity.compile; proximity.compile.compile_all(log=None)", python)[1]
+        rows.append(_seconds_row("empty cache: python -m proximity.compile, CPU time", cpu, 45.0))
     return rows
 
 
@@ -428,14 +473,15 @@ def format_table(rows):
     return "\n".join(lines)
 
 
-def run(quick=False, compile_time=False, package_python=None):
+def run(quick=False, package_python=None):
     """Measure every row; ``quick`` shrinks the sizes for a smoke run."""
     n = 100_000 if quick else 1_000_000
     repeats = 3 if quick else REPEATS
     rows = triangle_rows(n, repeats) + round_rows(n, repeats)
     rows += loop_row(2_000 if quick else 20_000, repeats)
     rows.append(memory_row(1_000_000 if quick else 10_000_000))
-    rows += startup_rows(3 if quick else REPEATS, compile_time, package_python)
+    rows += startup_rows(3 if quick else REPEATS, package_python)
+    rows += cold_rows(quick, package_python or sys.executable)
     return rows
 
 
@@ -444,17 +490,12 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smaller sizes, for a smoke run")
     parser.add_argument("--json", help="also write the rows to this file")
     parser.add_argument(
-        "--compile-time",
-        action="store_true",
-        help="also time compiling every kernel into an empty cache (minutes)",
-    )
-    parser.add_argument(
         "--package-python",
         metavar="PYTHON",
         help="an interpreter with the package and its dependencies alone, for the start-up rows",
     )
     args = parser.parse_args(argv)
-    rows = run(args.quick, args.compile_time, args.package_python)
+    rows = run(args.quick, args.package_python)
     text = format_table(rows)
     repeats = 3 if args.quick else REPEATS
     header = (

@@ -1,11 +1,14 @@
 """How the kernels are compiled: inlining, the disk cache, and specialisation.
 
-Two decorators and one function, used by every kernel module:
+Three decorators and one function, used by every kernel module:
 
 ``inline``
     A helper inlined by LLVM into its callers (``forceinline``).  Numba
     compiles it once per signature; inlining at Numba's IR level instead
     would run its front end again at every call site.
+``part``
+    A larger function compiled into the kernels that call it (a block of a
+    batch loop, a scalar query), where LLVM decides whether to inline.
 ``kernel``
     A compiled function that is cached on disk, where a cache can be kept
     (see :data:`CACHE`).
@@ -33,6 +36,10 @@ from numba import njit
 from numba.misc.appdirs import user_cache_dir
 
 _OPTIONS = {"error_model": "numpy"}
+# Helpers are called from compiled code only: no wrappers for Python callers
+# or for first-class function pointers, which would cost compile time.
+_PART = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True, **_OPTIONS}
+_INLINE = {"forceinline": True, **_PART}
 
 
 def _writable(directory):
@@ -69,7 +76,14 @@ if not CACHE:
 
 def inline(func):
     """A helper compiled into its callers by LLVM."""
-    return njit(forceinline=True, **_OPTIONS)(func)
+    return njit(**_INLINE)(func)
+
+
+def part(func):
+    """A function compiled into the kernels that call it (which LLVM may or
+    may not inline): callable from compiled code only, and cached as part of
+    its callers rather than on its own."""
+    return njit(**_PART)(func)
 
 
 def kernel(*signature, parallel=False):
@@ -82,10 +96,13 @@ _specialised = {}
 _lock = threading.Lock()
 
 
-def specialize(func, tag, signature=None, parallel=False, inline=False, **bindings):
+def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindings):
     """The kernel ``func`` with the global names ``bindings`` bound, compiled
-    for ``signature`` (lazily without one); with ``inline``, a helper that
-    LLVM inlines into its callers, never cached on its own.
+    for ``signature`` (lazily without one).
+
+    ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"`` or
+    ``"inline"`` (compiled into its callers, as :func:`part` and
+    :func:`inline`).
 
     ``tag`` names the specialisation: it is part of the cached kernel's file
     name, so every distinct set of ``bindings`` of one ``func`` needs its own.
@@ -105,8 +122,8 @@ def specialize(func, tag, signature=None, parallel=False, inline=False, **bindin
             copy.__doc__ = func.__doc__
             copy.__module__ = func.__module__
             args = (signature,) if signature is not None else ()
-            if inline:
-                kernel_ = njit(*args, forceinline=True, **_OPTIONS)(copy)
+            if role != "kernel":
+                kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:
                 kernel_ = njit(*args, parallel=parallel, cache=CACHE, **_OPTIONS)(copy)
             _specialised[key] = kernel_

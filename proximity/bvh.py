@@ -81,7 +81,7 @@ import numpy as np
 from numba import prange
 from numba.core import types
 
-from . import certified, point_disk, point_triangle
+from . import certified, methods, point_disk, point_triangle
 from ._fp import EPS
 from ._jit import inline, kernel, specialize
 from .results import Feature
@@ -379,7 +379,6 @@ def _nearest(
                 prim[i] = best_index
 
 
-
 @kernel()
 def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     """Stored primitives not culled at distance ``bound`` from ``p``, by the same tests as the search.
@@ -413,8 +412,6 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     return found
 
 
-
-
 @kernel()
 def _morton(points):
     """15-bit Morton codes of the points on a 32^3 grid over their finite bounding box.
@@ -446,8 +443,6 @@ def _morton(points):
             code |= x << a
         codes[i] = code
     return codes
-
-
 
 
 @kernel()
@@ -573,8 +568,6 @@ def _build(lo, hi, leaf_size):
     nodes[:, 0] = child[:n_nodes]
     nodes[:, 1] = count[:n_nodes]
     return nodes, order, depth
-
-
 
 
 @kernel()
@@ -861,7 +854,7 @@ def query_kernel(method):
     evaluate = specialize(
         _evaluate,
         name,
-        inline=True,
+        role="inline",
         TRIANGLE_QUERY=point_triangle.KERNELS[name][0],
         ROUND_QUERY=point_disk.KERNELS[name][0],
     )
@@ -945,12 +938,15 @@ def _resolve(tree, rows, points, undecided, out, full, cull, bounds, magnitude):
     answer is the one a single-shape query gives; the least wins, ties to
     the lowest index.
     """
-    from .shapes import Circle, Disk, Triangle
-
-    makers = {
-        TRIANGLE: lambda q: Triangle(q[:, :9].reshape(-1, 3, 3)),
-        DISK: lambda q: Disk(q[:, 0:3], q[:, 6:9], q[:, 9]),
-        CIRCLE: lambda q: Circle(q[:, 0:3], q[:, 6:9], q[:, 9]),
+    method = methods.CERTIFIED
+    kinds_params = {
+        TRIANGLE: lambda q, p: point_triangle.query(method, q[:, :9].reshape(-1, 3, 3), p, (len(q),), True),
+        DISK: lambda q, p: point_disk.query(
+            method, True, q[:, 0:3], q[:, 3:6], q[:, 6:9], q[:, 9], p, (len(q),), True
+        ),
+        CIRCLE: lambda q, p: point_disk.query(
+            method, False, q[:, 0:3], q[:, 3:6], q[:, 6:9], q[:, 9], p, (len(q),), True
+        ),
     }
     positions = np.empty(len(tree.kinds), np.int64)
     for i in rows:
@@ -958,27 +954,27 @@ def _resolve(tree, rows, points, undecided, out, full, cull, bounds, magnitude):
         bound = undecided[i]
         found = _gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, p, bound, positions)
         candidates = positions[:found]
-        answers = []  # (distance, caller's index, kind, the per-shape result)
-        for code, make in makers.items():
+        answers = []  # (distance, caller's index, kind, the per-shape outputs, row)
+        for code, query in kinds_params.items():
             chosen = candidates[tree.kinds[candidates] == code]
             if len(chosen) == 0:
                 continue
-            r = make(tree.params[chosen]).closest_point(p, method="certified")
+            r = query(tree.params[chosen], p)
             for j, idx in enumerate(tree.index[chosen]):
-                if not np.isnan(r.distance[j]):
-                    answers.append((float(r.distance[j]), int(idx), code, r[j]))
+                if not np.isnan(r["distance"][j]):
+                    answers.append((float(r["distance"][j]), int(idx), code, r, j))
         if not answers:
             continue
-        d, idx, code, r = min(answers, key=lambda a: (a[0], a[1]))
+        d, idx, code, r, j = min(answers, key=lambda a: (a[0], a[1]))
         out["distance"][i] = d
         if full:
-            out["sqr_distance"][i] = r.sqr_distance
-            out["point"][i] = r.point
-            out["feature"][i] = r.feature
+            out["sqr_distance"][i] = r["sqr_distance"][j]
+            out["point"][i] = r["point"][j]
+            out["feature"][i] = r["feature"][j]
             out["index"][i] = idx
             if code == TRIANGLE:
-                out["extra"][i] = r.barycentric
+                out["extra"][i] = r["barycentric"][j]
                 out["flag"][i] = False
             else:
-                out["extra"][i] = (r.height, r.radial, np.nan)
-                out["flag"][i] = bool(getattr(r, "equidistant", False))
+                out["extra"][i] = (r["height"][j], r["radial"][j], np.nan)
+                out["flag"][i] = bool(r["equidistant"][j]) if code == CIRCLE else False

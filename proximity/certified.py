@@ -43,7 +43,7 @@ from numba import literal_unroll, uint64
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
-from ._jit import inline, kernel
+from ._jit import inline, part
 from ._loops import BLOCK, gather_triangles, scatter_triangles, store
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
@@ -395,7 +395,7 @@ def _store_at(w, m, part, feature):
     w[22, m] = res[0]
 
 
-@kernel()
+@part
 def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
 
@@ -488,7 +488,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@kernel()
+@part
 def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Certified point-triangle query for any finite input, or a request for
     the exact fallback.
@@ -535,7 +535,7 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return r if r[0] == CERTAIN else fail
 
 
-@kernel()
+@part
 def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
     """Certified point-circle or point-disk query, or a request for the fallback.
 

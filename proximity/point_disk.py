@@ -18,7 +18,7 @@ from numba import prange
 from numba.core import types
 
 from . import _exact, _pool, certified, methods
-from ._jit import inline, kernel, specialize
+from ._jit import inline, part, specialize
 from ._loops import (
     A_IN2,
     A_IN3,
@@ -231,7 +231,7 @@ def _block(
     scatter_round(z, 10, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
-@kernel()
+@part
 def _robust_block_one(
     is_disk, C, U, N, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, exact, full
 ):
@@ -260,9 +260,7 @@ def _robust_block_one(
     for q in range(nb):
         if z[12, q] == 0.0:
             # The robust method reads the unit normal only; it stands in for the normal as given.
-            res = robust_query(
-                is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q]
-            )
+            res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
             store(z, 3, q, res[1:])
     scatter_round(z, 3, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
@@ -325,7 +323,9 @@ def single_kernel(method):
 def block_kernel(method):
     """The block function of ``method`` for pairs and all-pairs batches."""
     query_, simd, exact_fallback, _ = KERNELS[method.name]
-    return specialize(_block, method.name, QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback)
+    return specialize(
+        _block, method.name, role="part", QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback
+    )
 
 
 def batch_kernel(method, one):

@@ -58,7 +58,7 @@ from numba.core import types
 
 from . import _exact, _pool, certified
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
-from ._jit import inline, kernel, specialize
+from ._jit import inline, kernel, part, specialize
 from ._loops import (
     A_IN3,
     A_IN4,
@@ -439,7 +439,7 @@ def _window(ax, ay, az, bx, by, bz, cx, cy, cz):
     return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
 
-@kernel()
+@part
 def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Robust point-triangle query for any finite input; see the module docstring.
 
@@ -539,7 +539,7 @@ def exact_row(row, vertices, point):
 _NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
 
 
-@kernel()
+@part
 def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
@@ -576,7 +576,7 @@ def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@kernel()
+@part
 def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """:func:`_robust_block` for the seed's method: rows with a non-finite
     point are the only ones it leaves, and get NaN.
@@ -611,7 +611,7 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
-@kernel()
+@part
 def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """:func:`_eberly_block` for a batch against one triangle, ``V[0, 0]``.
 

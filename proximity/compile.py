@@ -1,0 +1,112 @@
+"""Compile every kernel ahead of time: ``python -m proximity.compile``.
+
+A query compiles the kernels it uses at its first call and keeps them in
+the disk cache (see :mod:`proximity._jit`).  Containers and CI images that
+should answer their first query at once run this command after installing,
+where the cache is writable, to compile every method of every shape and
+path.  It prints each kernel as it is done.
+
+Examples
+--------
+>>> import proximity.compile
+>>> done = proximity.compile.compile_all(methods=["robust"], log=None)
+>>> sorted(done)[:3]
+['disk: robust, many points against one shape', 'disk: robust, one point', 'disk: robust, pairs']
+"""
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from . import methods as _methods
+
+
+def _jobs(method):
+    """``(description, function)`` for each kernel of ``method``."""
+    from . import bvh, point_disk, point_triangle
+    from ._loops import single_entry
+
+    m = _methods.resolve(method)
+    name = m.name
+    jobs = [
+        (f"triangle: {name}, one point", lambda: single_entry(point_triangle.single_kernel(m))),
+        (f"triangle: {name}, pairs", lambda: point_triangle.batch_kernel(m, False)),
+        (f"triangle: {name}, many points against one shape", lambda: point_triangle.batch_kernel(m, True)),
+        (f"disk: {name}, one point", lambda: single_entry(point_disk.single_kernel(m))),
+        (f"disk: {name}, pairs", lambda: point_disk.batch_kernel(m, False)),
+        (f"disk: {name}, many points against one shape", lambda: point_disk.batch_kernel(m, True)),
+        (f"mesh and scene: {name}", lambda: bvh.query_kernel(m)),
+    ]
+    return jobs
+
+
+def _broad_phase():
+    """The hierarchy's build, refit, visiting order and candidate search, on a small mesh."""
+    from . import bvh
+
+    rng = np.random.default_rng(0)
+    kinds = np.zeros(8, np.int8)
+    params = np.concatenate([rng.random((8, 9)), np.zeros((8, 1))], axis=1)
+    tree = bvh.build(kinds, params)
+    points = bvh._readonly(rng.random((2, 3)), np.float64)
+    bvh._morton(points)
+    bounds, cull, magnitude = tree.boxes(False)
+    out = np.empty(len(kinds), np.int64)
+    bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
+
+
+def compile_all(methods=None, log=sys.stdout):
+    """Compile the kernels of ``methods`` (default: every method) and of the broad phase.
+
+    Parameters
+    ----------
+    methods : sequence of str, optional
+        Method names; all of :data:`proximity.methods.REGISTRY` by default.
+    log : file, optional
+        Where a line per kernel is printed; None for silence.
+
+    Returns
+    -------
+    dict of str to float
+        Seconds spent on each kernel (near zero where it was cached).
+    """
+    names = list(_methods.REGISTRY) if methods is None else list(methods)
+    jobs = [job for name in names for job in _jobs(name)]
+    jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
+    done = {}
+    for k, (description, job) in enumerate(jobs, 1):
+        start = time.perf_counter()
+        job()
+        done[description] = time.perf_counter() - start
+        if log is not None:
+            print(f"[{k:2d}/{len(jobs)}] {description}: {done[description]:.1f} s", file=log, flush=True)
+    return done
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="python -m proximity.compile",
+        description="Compile proximity's kernels into the disk cache, so that first queries start at once.",
+    )
+    parser.add_argument(
+        "--method",
+        action="append",
+        choices=list(_methods.REGISTRY),
+        help="compile only this method (repeatable); default: every method",
+    )
+    args = parser.parse_args(argv)
+    from . import _jit
+
+    if not _jit.CACHE:
+        print("no writable cache directory: compiled kernels cannot be kept", file=sys.stderr)
+        return 1
+    start = time.perf_counter()
+    compile_all(args.method)
+    print(f"done in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
