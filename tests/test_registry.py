@@ -1,0 +1,84 @@
+"""The method registry drives every method through every shape and path."""
+
+import numpy as np
+import pytest
+
+import proximity
+from proximity import methods
+from tests import exact
+
+RNG = np.random.default_rng(11)
+VERTICES = RNG.normal(size=(6, 3, 3))
+POINTS = RNG.normal(size=(6, 3)) * 2
+CENTERS, NORMALS, RADII = RNG.normal(size=(6, 3)), RNG.normal(size=(6, 3)), RNG.uniform(0.5, 2, 6)
+
+
+def _shapes():
+    """``(name, batch of 6 shapes, one shape, exact distance of shape k to point)``."""
+    yield (
+        "triangle",
+        proximity.Triangle(VERTICES),
+        proximity.Triangle(VERTICES[0]),
+        (lambda k, p: exact.triangle_distance(VERTICES[k], p)),
+    )
+    for cls, reference in ((proximity.Disk, exact.disk_distance), (proximity.Circle, exact.circle_distance)):
+        yield (
+            cls.__name__.lower(),
+            cls(CENTERS, NORMALS, RADII),
+            cls(CENTERS[0], NORMALS[0], RADII[0]),
+            (lambda k, p, reference=reference: reference(CENTERS[k], NORMALS[k], RADII[k], p)),
+        )
+
+
+def _within_bound(method, d, d_exact, scale):
+    if method is methods.ROBUST:
+        return exact.error_in_units(d, d_exact, scale) <= 8.0
+    if method is methods.CERTIFIED:
+        return exact.ulps(d, d_exact) < 1.0
+    return np.isfinite(d)  # eberly promises nothing, but these inputs are well conditioned
+
+
+@pytest.mark.parametrize("name", list(methods.REGISTRY))
+def test_every_method_through_every_shape_and_path(name):
+    method = methods.REGISTRY[name]
+    for kind, batch, one, reference in _shapes():
+        pairs = batch.closest_point(POINTS, method=name)
+        against_one = one.closest_point(POINTS, method=name)
+        for k, p in enumerate(POINTS):
+            single = one.closest_point(p, method=name)
+            # The one-point fast path and the batch kernels give the same bits.
+            assert single.distance.tobytes() == against_one.distance[k].tobytes(), (kind, name, k)
+            assert single.point.tobytes() == against_one.point[k].tobytes(), (kind, name, k)
+            for d, shape_index in ((pairs.distance[k], k), (against_one.distance[k], 0)):
+                scale = (
+                    exact.triangle_scale(VERTICES[shape_index], p)
+                    if kind == "triangle"
+                    else exact.circle_scale(CENTERS[shape_index], RADII[shape_index], p)
+                )
+                assert _within_bound(method, float(d), reference(shape_index, p), scale), (kind, name, k)
+    mesh = proximity.TriangleMesh(VERTICES.reshape(-1, 3), np.arange(18).reshape(-1, 3))
+    scene = proximity.Scene([mesh, proximity.Disk(CENTERS, NORMALS, RADII)])
+    for collection in (mesh, scene):
+        d = collection.distance(POINTS, method=name)
+        assert np.isfinite(d).all() and d.shape == (6,)
+
+
+def test_compile_all_covers_every_method():
+    from proximity import compile as compile_module
+
+    jobs = [description for name in methods.REGISTRY for description, _ in compile_module._jobs(name)]
+    for name in methods.REGISTRY:
+        assert sum(f": {name}" in job for job in jobs) == 7, name
+
+
+@pytest.mark.parametrize(
+    "method, error",
+    [("fast", ValueError), (["robust"], TypeError), (None, TypeError), (1, TypeError)],
+)
+def test_unknown_methods_are_refused_at_the_boundary(method, error):
+    tri = proximity.Triangle(VERTICES[0])
+    for call in (tri.distance, tri.closest_point):
+        with pytest.raises(error, match="method must be"):
+            call(POINTS, method=method)
+        with pytest.raises(error, match="method must be"):
+            call(POINTS[0], method=method)
