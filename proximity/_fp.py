@@ -100,6 +100,23 @@ def pow2_scale(m):
     return math.ldexp(1.0, half), math.ldexp(1.0, -e - half)
 
 
+#: The scale of a computation done in the frame it was given in.
+UNSCALED = (1.0, 1.0, 1.0)
+
+
+@inline
+def unscale(x, g):
+    """``x`` times the power of two ``g = (product, first, second)``.
+
+    A computation done on inputs multiplied by ``1 / product`` is undone by
+    this.  Where the product is past the float range (a distance from
+    2^1023 on is scaled down by 2^-1024), the two factors it was made of are
+    applied in turn, so a result that is finite comes out finite; elsewhere
+    both give the same bits.
+    """
+    return x * g[0] if g[0] != math.inf else x * g[1] * g[2]
+
+
 @inline
 def edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
     # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.

@@ -26,6 +26,7 @@ is used, or ``NUMBA_CACHE_DIR`` when it is set; where none can be written,
 kernels are compiled in memory at every start, with a warning.
 """
 
+import hashlib
 import os
 import tempfile
 import threading
@@ -94,6 +95,28 @@ def kernel(*signature, parallel=False):
 
 _specialised = {}
 _lock = threading.Lock()
+_stamp = None
+
+
+def _sources_stamp():
+    """A short hash of the package's source files' names, sizes and times.
+
+    A specialised kernel has code of several modules compiled into it, but
+    Numba invalidates a cached kernel only when its own module changes;
+    the stamp is part of the cached file's name, so that an edit to any
+    module (or an upgrade) compiles the kernels again rather than loading
+    stale ones.
+    """
+    global _stamp
+    if _stamp is None:
+        here = os.path.dirname(os.path.abspath(__file__))
+        digest = hashlib.blake2b(digest_size=6)
+        for name in sorted(os.listdir(here)):
+            if name.endswith(".py"):
+                info = os.stat(os.path.join(here, name))
+                digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns};".encode())
+        _stamp = digest.hexdigest()
+    return _stamp
 
 
 def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindings):
@@ -118,7 +141,7 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
             namespace = dict(func.__globals__)
             namespace.update(bindings)
             copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__)
-            copy.__qualname__ = f"{func.__qualname__}__{tag}"
+            copy.__qualname__ = f"{func.__qualname__}__{tag}__{_sources_stamp()}"
             copy.__doc__ = func.__doc__
             copy.__module__ = func.__module__
             args = (signature,) if signature is not None else ()

@@ -765,7 +765,7 @@ def primitive_cull(kinds, params):
     return cull, loose
 
 
-def _tree(kinds, params, order, child, count, depth, cull):
+def _tree(kinds, params, order, child, count, depth, cull, index=None):
     tight, loose = cull
     kinds = _readonly(kinds[order], np.int8)
     params = _readonly(params[order], np.float64)
@@ -780,7 +780,7 @@ def _tree(kinds, params, order, child, count, depth, cull):
     return Tree(
         kinds=kinds,
         params=params,
-        index=_readonly(order, np.int64),
+        index=_readonly(order if index is None else index, np.int64),
         child=child,
         count=count,
         bounds=_readonly(bounds, np.float64),
@@ -789,6 +789,34 @@ def _tree(kinds, params, order, child, count, depth, cull):
         loose_cull=loose,
         depth=int(depth),
     )
+
+
+def distinct(kinds, params):
+    """Which primitives to store: all but exact copies (the same kind and the
+    same bits) of a primitive with a lower index.
+
+    A copy gives the same answer to every query, bit for bit, and loses
+    every tie to the original, so it can never be the answer; stored, it
+    would be visited at every tie (a mesh of many identical faces would
+    visit them all for every point).
+    """
+    n = len(kinds)
+    bits = np.concatenate([kinds.astype(np.uint64)[:, None], params.view(np.uint64)], axis=1)
+    h = np.zeros(n, np.uint64)
+    for column in bits.T:
+        h = (h ^ column) * np.uint64(0x100000001B3)  # FNV-style mixing of the row's bits
+    order = np.argsort(h, kind="stable")
+    sorted_h = h[order]
+    starts = np.concatenate([[True], sorted_h[1:] != sorted_h[:-1]])
+    # The first of each run of equal hashes has the lowest index (the sort is
+    # stable); a later row that equals it bit for bit is a copy.
+    later = np.flatnonzero(~starts)
+    keep = np.ones(n, np.bool_)
+    if len(later):
+        first = order[np.maximum.accumulate(np.where(starts, np.arange(n), 0))[later]]
+        rows = order[later]
+        keep[rows[(bits[rows] == bits[first]).all(axis=1)]] = False
+    return keep
 
 
 def brute(kinds, params):
@@ -822,13 +850,14 @@ def build(kinds, params, leaf_size=LEAF_SIZE):
     -------
     Tree
     """
-    cull = primitive_cull(kinds, params)
+    kept = np.flatnonzero(distinct(kinds, params))
+    cull = primitive_cull(kinds[kept], params[kept])
     lo = _readonly(cull[0][:, 0:3], np.float64)
     hi = _readonly(cull[0][:, 3:6], np.float64)
     nodes, order, depth = _build(lo, hi, int(leaf_size))
     child = _readonly(nodes[:, 0], np.int64)
     count = _readonly(nodes[:, 1], np.int64)
-    return _tree(kinds, params, order, child, count, depth, cull)
+    return _tree(kinds[kept], params[kept], order, child, count, depth, cull, kept[order])
 
 
 #: Batches at least this large are queried in Morton order of the points.

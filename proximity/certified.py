@@ -42,7 +42,7 @@ from numba import literal_unroll, uint64
 
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
-from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
+from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale, unscale
 from ._jit import inline, part
 from ._loops import BLOCK, gather_triangles, scatter_triangles, store
 from .point_circle import decompose, rim_direction
@@ -628,8 +628,8 @@ def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
     # The closest point, height and radial distance in float, as the robust method.
     h, qx, qy, qz, q, _, _, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
     if face:
-        x, y, z, feature = cx + qx * g, cy + qy * g, cz + qz * g, FACE
+        x, y, z, feature = cx + unscale(qx, g), cy + unscale(qy, g), cz + unscale(qz, g), FACE
     else:
         wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
         x, y, z, feature = cx + radius * wx, cy + radius * wy, cz + radius * wz, RIM
-    return CERTAIN, dist, s * g1 * g1 * g2 * g2, x, y, z, feature, on_axis, h * g, q * g
+    return CERTAIN, dist, s * g1 * g1 * g2 * g2, x, y, z, feature, on_axis, unscale(h, g), unscale(q, g)

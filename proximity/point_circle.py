@@ -32,7 +32,7 @@ Two methods:
 
 import math
 
-from ._fp import EPS, SAFE_MAX, SAFE_MIN, pow2_scale
+from ._fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
 from ._jit import inline
 
 # The radial part is the difference of two vectors of length up to |D|; below
@@ -71,22 +71,22 @@ def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
     """:func:`decompose_local` for any finite input, in a scaled frame.
 
     Returns ``(h, qx, qy, qz, q, on_axis, r, g)``: lengths are multiplied by
-    a power of two ``1 / g`` chosen so that no squared term over- or
-    underflows.
+    a power of two chosen so that no squared term over- or underflows, which
+    :func:`~proximity._fp.unscale` with ``g`` undoes.
     """
     dx, dy, dz = px - cx, py - cy, pz - cz
     m, _ = window(dx, dy, dz, r)
-    g = 1.0
+    g = UNSCALED
     if m > 1.7e308:
         # A difference of two finite coordinates overflowed: quarter first.
         dx, dy, dz = px * 0.25 - cx * 0.25, py * 0.25 - cy * 0.25, pz * 0.25 - cz * 0.25
         r = r * 0.25
         m, _ = window(dx, dy, dz, r)
-        g = 4.0
+        g = (4.0, 4.0, 1.0)
     if m < SAFE_MIN or m > SAFE_MAX:
         f1, f2 = pow2_scale(m)
         dx, dy, dz, r = dx * f1 * f2, dy * f1 * f2, dz * f1 * f2, r * f1 * f2
-        g = g / f1 / f2
+        g = (g[0] / f1 / f2, g[1] / f1, 1.0 / f2)
     h, qx, qy, qz, q, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
     return h, qx, qy, qz, q, on_axis, r, g
 
@@ -120,7 +120,13 @@ def rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
     dr = q - r
     sqr = h * h + dr * dr
-    return math.sqrt(sqr) * g, sqr * g * g, cx + radius * wx, cy + radius * wy, cz + radius * wz
+    return (
+        unscale(math.sqrt(sqr), g),
+        unscale(unscale(sqr, g), g),
+        cx + radius * wx,
+        cy + radius * wy,
+        cz + radius * wz,
+    )
 
 
 @inline
@@ -131,7 +137,7 @@ def circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """
     h, qx, qy, qz, q, on_axis, r, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
     d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
-    return d, sqr, x, y, z, on_axis, h * g, q * g
+    return d, sqr, x, y, z, on_axis, unscale(h, g), unscale(q, g)
 
 
 @inline

@@ -18,6 +18,7 @@ from numba import prange
 from numba.core import types
 
 from . import _exact, _pool, certified, methods
+from ._fp import UNSCALED, unscale
 from ._jit import inline, part, specialize
 from ._loops import (
     A_IN2,
@@ -48,8 +49,19 @@ def _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g):
     """Face or rim, from a decomposition; the query's full return tuple."""
     d, sqr, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, q, on_axis, r, g)
     if q <= r:
-        return abs(h) * g, h * h * g * g, cx + qx * g, cy + qy * g, cz + qz * g, FACE, False, h * g, q * g
-    return d, sqr, x, y, z, RIM, False, h * g, q * g
+        x, y, z = cx + unscale(qx, g), cy + unscale(qy, g), cz + unscale(qz, g)
+        return (
+            unscale(abs(h), g),
+            unscale(unscale(h * h, g), g),
+            x,
+            y,
+            z,
+            FACE,
+            False,
+            unscale(h, g),
+            unscale(q, g),
+        )
+    return d, sqr, x, y, z, RIM, False, unscale(h, g), unscale(q, g)
 
 
 @inline
@@ -158,8 +170,8 @@ def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     dx, dy, dz = px - cx, py - cy, pz - cz
     _, ok = window(dx, dy, dz, radius)
     h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-    res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
-    d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, 1.0)
+    res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
+    d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     if not is_disk:
         res = (d, s, x, y, z, RIM, on_axis, h, qq)
     return res, ok

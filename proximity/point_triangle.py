@@ -57,7 +57,16 @@ from numba import prange
 from numba.core import types
 
 from . import _exact, _pool, certified
-from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, pow2_scale
+from ._fp import (
+    SAFE_MAX,
+    SAFE_MIN,
+    UNSCALED,
+    cross_accurate,
+    dot3_accurate,
+    edge_function,
+    pow2_scale,
+    unscale,
+)
 from ._jit import inline, kernel, part, specialize
 from ._loops import (
     A_IN3,
@@ -417,16 +426,16 @@ def _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     A vertex is reported exactly, not as ``P + (V - P)``.
     """
     dist, sqr, x, y, z, feature, b0, b1, b2 = r
-    x = px + x * g
-    y = py + y * g
-    z = pz + z * g
+    x = px + unscale(x, g)
+    y = py + unscale(y, g)
+    z = pz + unscale(z, g)
     if feature == VERTEX0:
         x, y, z = v0x, v0y, v0z
     if feature == VERTEX1:
         x, y, z = v1x, v1y, v1z
     if feature == VERTEX2:
         x, y, z = v2x, v2y, v2z
-    return dist * g, sqr * g * g, x, y, z, feature, b0, b1, b2
+    return unscale(dist, g), unscale(unscale(sqr, g), g), x, y, z, feature, b0, b1, b2
 
 
 @inline
@@ -451,7 +460,7 @@ def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     bx, by, bz = v1x - px, v1y - py, v1z - pz
     cx, cy, cz = v2x - px, v2y - py, v2z - pz
     m, _ = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
-    g = 1.0  # undoes the scaling of the differences
+    g = UNSCALED  # undoes the scaling of the differences
     if m > 1.7e308:
         # A difference of two finite coordinates overflowed: quarter first.
         q = 0.25
@@ -459,7 +468,7 @@ def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
         bx, by, bz = v1x * q - px * q, v1y * q - py * q, v1z * q - pz * q
         cx, cy, cz = v2x * q - px * q, v2y * q - py * q, v2z * q - pz * q
         m, _ = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
-        g = 4.0
+        g = (4.0, 4.0, 1.0)
     if m == 0.0:
         return 0.0, 0.0, v0x, v0y, v0z, VERTEX0, 1.0, 0.0, 0.0
     if m < SAFE_MIN or m > SAFE_MAX:
@@ -467,7 +476,7 @@ def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
         ax, ay, az = ax * f1 * f2, ay * f1 * f2, az * f1 * f2
         bx, by, bz = bx * f1 * f2, by * f1 * f2, bz * f1 * f2
         cx, cy, cz = cx * f1 * f2, cy * f1 * f2, cz * f1 * f2
-        g = g / f1 / f2
+        g = (g[0] / f1 / f2, g[1] / f1, 1.0 / f2)
     r = _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz)
     return _finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
 
@@ -558,7 +567,8 @@ def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
         _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
         res = _finish(
             _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
-            1.0, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz,
+            UNSCALED, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q],
+            px, py, pz,
         )  # fmt: skip
         store(z, 12, q, res)
         z[21, q] = ok
