@@ -36,7 +36,7 @@ $(CORE_STAMP): $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m ruff check proximity adapters benchmarks tests
-	$(BIN)/python -m pytest proximity tests README.md
+	$(BIN)/python -m pytest proximity adapters tests README.md
 
 # A regular install byte-compiles the package; an editable one leaves that to
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
