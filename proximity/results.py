@@ -127,8 +127,9 @@ class TriangleResult(Result):
     ----------
     barycentric : ndarray of float64, shape ``batch + (3,)``
         Weights ``(b0, b1, b2)`` of the vertices, summing to 1, with
-        ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the seed's
-        notation ``(s, t) = (b1, b2)``.  On the face of a sliver of height
+        ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the notation
+        of Eberly's *Distance Between Point and Triangle in 3D*,
+        ``(s, t) = (b1, b2)``.  On the face of a sliver of height
         ``h`` they are determined only to about ``eps * S / h`` (points that
         close together have barycentrics that far apart); ``point`` and
         ``distance`` keep their accuracy there.

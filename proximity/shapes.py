@@ -307,9 +307,12 @@ class Circle(_Round):
     radius : array_like, shape ``batch``
         Radius, >= 0.  The batch dimensions of the three broadcast.
 
+    Notes
+    -----
     Method ``robust`` (default) decomposes ``P - C`` into height and radial
     terms and is accurate to ``8 eps (|P - C| + R)``; ``eberly`` is the
-    seed's formula as written, kept as a baseline.
+    formula of Eberly's *Distance Between Point and Circle or Disk in 3D*
+    as written, kept as a baseline.
 
     Examples
     --------
