@@ -1,13 +1,14 @@
-# `make test` and `make bench` each create .venv when missing and install the
-# project into it with everything the job needs.
+# `make test`, `make bench` and `make docs` each create .venv when missing and
+# install the project into it with everything the job needs.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 CORE := .venv-core
 CORE_STAMP := $(CORE)/.installed
+DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: test bench bench-quick clean clean-cache
+.PHONY: test bench bench-quick docs clean clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -16,6 +17,10 @@ $(BIN)/python:
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
 	touch $(STAMP)
+
+$(DOCS_STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
 
 # The package with its own dependencies alone, as `pip install proximity`
 # gives it, for the speed benchmark's start-up rows: with scipy installed (the
@@ -31,7 +36,7 @@ $(CORE_STAMP): $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m ruff check proximity adapters benchmarks tests
-	$(BIN)/python -m pytest proximity tests README.md
+	$(BIN)/python -m pytest proximity adapters tests README.md
 
 # A regular install byte-compiles the package; an editable one leaves that to
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
@@ -45,5 +50,11 @@ bench-quick: $(STAMP) $(CORE_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
 
+# The API reference, from the docstrings, into docs/_build/html; a warning
+# fails the build.
+docs: $(DOCS_STAMP)
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "API reference: docs/_build/html/index.html"
+
 clean:
-	rm -rf $(VENV) $(CORE) bench-results .pytest_cache
+	rm -rf $(VENV) $(CORE) bench-results .pytest_cache docs/_build

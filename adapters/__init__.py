@@ -66,6 +66,14 @@ def available():
     -------
     list of str
         A subset of :data:`NAMES`, in that order.
+
+    Examples
+    --------
+    >>> import adapters
+    >>> adapters.NAMES
+    ('fcl', 'trimesh', 'pybullet')
+    >>> set(adapters.available()) <= set(adapters.NAMES)
+    True
     """
     names = []
     for name in NAMES:
@@ -103,6 +111,15 @@ def get(name, **options):
         install: ``pip install 'proximity[adapters]'``.
     ValueError
         For an unknown name.
+
+    Examples
+    --------
+    >>> import proximity, adapters
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> with adapters.get("trimesh") as backend:
+    ...     r = backend.distance(tri, [[0.2, 0.2, 1.0], [2.0, 0.0, 0.0]])
+    >>> r.tolist()
+    [1.0, 1.0]
     """
     module = _module(name)
     return getattr(module, _REGISTRY[name][1])(**options)

@@ -45,6 +45,18 @@ class Failure(enum.IntEnum):
 
     Failure arrays hold these codes as ``int8``.  Every row whose code is not
     ``OK`` has NaN in all float fields of the result and ``Feature.NONE``.
+
+    Examples
+    --------
+    fcl answers -1 for a point in a disk's plane inside the disk; that
+    sentinel becomes NaN with the code ``SENTINEL``:
+
+    >>> import proximity, adapters
+    >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> with adapters.get("fcl") as backend:
+    ...     r = backend.closest_point(disk, [[0.5, 0, 0], [0.5, 0, 1]])
+    >>> [adapters.Failure(f).name for f in r.failure], r.distance.tolist()
+    (['SENTINEL', 'OK'], [nan, 1.0])
     """
 
     #: The library answered, and the answer is consistent with the geometry.
@@ -95,6 +107,15 @@ class Model:
         Relative accuracy the backend documents for the library's arithmetic.
     frame : str
         Coordinates the library worked in.
+
+    Examples
+    --------
+    >>> import proximity, adapters
+    >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> with adapters.get("fcl") as backend:
+    ...     model = backend.closest_point(disk, [0, 0, 1]).model
+    >>> model.describe(), int(model.segments), float(model.bound)
+    ('Cylinder(R, 0)', 0, 0.0)
     """
 
     library: str
@@ -148,6 +169,17 @@ class BackendResult:
         Fields of :attr:`result` the library cannot give.
     backend : str
         Name of the backend that answered.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity, adapters
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> with adapters.get("trimesh") as backend:
+    ...     r = backend.closest_point(tri, [[0.2, 0.2, 1.0], [np.nan, 0, 0]])
+    >>> r.distance.tolist(), r.ok.tolist(), [adapters.Failure(f).name for f in r.failure]
+    ([1.0, nan], [True, False], ['OK', 'NAN_INPUT'])
+    >>> r.backend, r.unknown      # trimesh gives no feature or barycentrics
+    ('trimesh', ('feature', 'barycentric'))
     """
 
     result: object

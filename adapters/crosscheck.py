@@ -36,6 +36,15 @@ class Summary:
     beyond_tolerance : int
         Answered rows whose disagreement exceeds the backend's documented
         tolerance for that row.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity, adapters
+    >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> points = np.random.default_rng(0).normal(size=(20, 3))
+    >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh")
+    >>> s.rows, s.answered, dict(s.failures), s.max_relative < 1e-3
+    (20, 20, {}, True)
     """
 
     backend: str
@@ -56,6 +65,15 @@ class Case:
 
     ``ratio`` is the disagreement divided by the backend's tolerance for the
     row: above 1 the backend is outside what it documents.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity, adapters
+    >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> points = np.random.default_rng(0).normal(size=(20, 3))
+    >>> case = adapters.cross_check(circle, points, backends=["trimesh"], worst=1).worst[0]
+    >>> case.backend, bool(case.disagreement == abs(case.distance - case.reference)), case.ratio < 1
+    ('trimesh', True, True)
     """
 
     backend: str
@@ -83,6 +101,17 @@ class CrossCheck:
     worst : tuple of Case
         For each backend, its answered rows with the largest
         disagreement-to-tolerance ratio, largest first.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity, adapters
+    >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> points = np.random.default_rng(0).normal(size=(20, 3))
+    >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
+    >>> report.reference, [s.backend for s in report.summaries], len(report.worst)
+    ('certified', ['trimesh'], 3)
+    >>> print(report.table().splitlines()[0])
+    Circle(batch_shape=()) against proximity certified
     """
 
     shape: str

@@ -15,7 +15,7 @@ for the suite on two cores, kernels cached), ``--seed``,
 ``--out DIR`` (default ``bench-results``), ``--report-only`` to redraw the
 charts and report from existing raw data, ``--no-speed`` to skip step 3, and
 ``--publish`` to copy the charts to ``docs/`` and rewrite the benchmark
-section of ``README.md`` from the same data; ``--package-python`` is passed
+section of ``docs/benchmarks.md`` from the same data; ``--package-python`` is passed
 to the speed step (``make bench`` gives it an environment with the package
 alone, for the start-up rows).
 """
@@ -78,7 +78,7 @@ def main(argv=None):
     parser.add_argument(
         "--publish",
         action="store_true",
-        help="copy the charts to docs/ and rewrite README.md's benchmark section",
+        help="copy the charts to docs/ and rewrite the benchmark section of docs/benchmarks.md",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(
@@ -111,8 +111,8 @@ def main(argv=None):
         report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
     print(f"report: {out / 'report.md'}", file=sys.stderr)
     if args.publish:
-        report.publish(raw, pngs, docs=ROOT / "docs", readme=ROOT / "README.md")
-        print("published: docs/*.png and README.md's benchmark section", file=sys.stderr)
+        report.publish(raw, pngs, docs=ROOT / "docs", page=ROOT / "docs" / "benchmarks.md")
+        print("published: docs/*.png and the benchmark section of docs/benchmarks.md", file=sys.stderr)
     return 0 if ok else 1
 
 

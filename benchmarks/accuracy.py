@@ -4,9 +4,9 @@ Errors are in units of ``eps * S`` (``eps = 2^-52``; ``S = max_i |P - V_i|``
 for triangles, ``|P - C| + R`` for circles and disks), the unit of the
 robust method's bound of 8.
 
-    python -m benchmarks.accuracy [-n 200] [--seed 0] [--readme README.md]
+    python -m benchmarks.accuracy [-n 200] [--seed 0] [--write docs/accuracy.md]
 
-With ``--readme`` the table between the ``accuracy-table`` markers of that
+With ``--write`` the table between the ``accuracy-table`` markers of that
 file is replaced by the new one.
 """
 
@@ -122,27 +122,27 @@ def table(n=200, seed=0):
     return "\n".join(lines)
 
 
-def update_readme(path, text):
+def write_table(path, text):
     """Replace the table between the accuracy-table markers of ``path``."""
     with open(path, encoding="utf-8") as f:
-        readme = f.read()
+        page = f.read()
     pattern = re.compile(r"(<!-- accuracy-table:start[^>]*-->\n).*?(<!-- accuracy-table:end -->)", re.S)
-    if not pattern.search(readme):
+    if not pattern.search(page):
         raise SystemExit(f"{path} has no accuracy-table markers")
     with open(path, "w", encoding="utf-8") as f:
-        f.write(pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), readme))
+        f.write(pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), page))
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-n", type=int, default=200, help="queries per family (default 200)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--readme", help="rewrite the table in this README")
+    parser.add_argument("--write", metavar="PATH", help="rewrite the table between the markers of this page")
     args = parser.parse_args(argv)
     text = table(args.n, args.seed)
     print(text)
-    if args.readme:
-        update_readme(args.readme, text)
+    if args.write:
+        write_table(args.write, text)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,9 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
 
 ``accuracy_speed.png``
     For each query type, queries per second against the worst and median
-    error, in ``eps * S`` and in ulps of ``d*``, one marker per method or
+    error, in ``eps * S`` (every answered query) and in ulps of ``d*`` (the
+    queries with ``d* > 0``: where the exact distance is 0 an ulp is the
+    smallest subnormal and measures nothing), one marker per method or
     backend, with the Pareto front of those that answered every query.
 ``stability_triangle.png``, ``stability_round.png``
     Each sweep of :mod:`benchmarks.scenes`: the worst error against the
@@ -15,6 +17,9 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
     For backends that cut circles and disks into ``K`` segments: error and
     time per query against ``K``, with the sagitta bound and proximity's
     ``robust`` for comparison.
+
+Every chart has a title, labelled axes with units, and a caption
+(:data:`CAPTIONS`, also printed under it in the report) saying what to look at.
 """
 
 import io
@@ -65,6 +70,27 @@ DIFFICULTY = {
 
 DPI = 100
 
+_STABILITY_CAPTION = (
+    "What to look at: where a line rises above the dashed line (robust's bound, 8 eps·S) and "
+    "where its failure share (upper strip) leaves 0, as each sweep gets harder to the right."
+)
+
+#: One line under each chart: what to look at.
+CAPTIONS = {
+    "accuracy_speed": (
+        "What to look at: markers low and to the right are accurate and fast (filled: worst, hollow: "
+        "median). Top row: error in eps·S, the unit of robust's bound, over every answered query. "
+        "Bottom row: error in ulps of the exact distance d* where d* > 0, the unit of certified's bound; "
+        "robust's bound is absolute, so where d* is tiny beside S its error is many ulps of d*."
+    ),
+    "stability_triangle": _STABILITY_CAPTION,
+    "stability_round": _STABILITY_CAPTION,
+    "tessellation": (
+        "What to look at: the gap between the libraries' lines and proximity's flat blue lines; "
+        "the libraries' error follows the sagitta and shrinks only as K, and with it their time, grows."
+    ),
+}
+
 
 _EXTRA = {}
 
@@ -113,22 +139,42 @@ def _subtitle(raw):
     )
 
 
+def _caption(fig, name, y=0.012):
+    """The chart's caption (:data:`CAPTIONS`) along the bottom of the figure, wrapped to its width."""
+    import textwrap
+
+    width = int(fig.get_figwidth() * DPI / 7.4)
+    fig.text(
+        0.5, y, textwrap.fill(CAPTIONS[name], width), ha="center", va="bottom", fontsize=9, style="italic"
+    )
+
+
 # -- 1. accuracy against speed ---------------------------------------------------------
 
 
 def accuracy_speed(raw, path):
-    """Queries per second against worst and median error, per query type."""
+    """Queries per second against worst and median error, per query type.
+
+    The top row is in ``eps * S`` over every answered query; the bottom row in
+    ulps of ``d*`` over those with ``d* > 0`` (see :mod:`benchmarks.summary`).
+    """
     plt = _plt()
     units = list(summary.UNITS)
-    fig, axes = plt.subplots(len(units), 3, figsize=(13, 8.2), squeeze=False)
+    fig, axes = plt.subplots(len(units), 3, figsize=(13, 9.2), squeeze=False)
     seen = {}
     for col, kind in enumerate(summary.KINDS):
         stats = summary.by_kind(raw, kind)
         for row, unit in enumerate(units):
             ax = axes[row, col]
-            seen.update(_speed_panel(ax, stats, unit, failures=row == 0))
-            if row == 0:
-                ax.set_title(f"point–{kind}")
+            handles, note = _speed_panel(ax, stats, unit, failures=row == 0)
+            seen.update(handles)
+            on_shape = max((s.on_shape for s in stats.values()), default=0)
+            lines = [f"point–{kind}"] if row == 0 else []
+            if unit == "error_ulps" and on_shape:
+                lines.append(f"{on_shape} queries with d* = 0 left out (they are in the row above)")
+            if note:
+                lines.append(note)
+            ax.set_title("\n".join(lines), fontsize=10 if row == 0 else 8)
             if row == len(units) - 1:
                 ax.set_xlabel("queries per second (median over families)")
             if col == 0:
@@ -145,22 +191,33 @@ def accuracy_speed(raw, path):
         "hollow: median",
         "Pareto front of the worst error\n(shaded: dominated)",
     ]
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 6), frameon=False)
+    fig.legend(
+        handles,
+        labels,
+        loc="lower center",
+        ncol=min(len(labels), 6),
+        frameon=False,
+        bbox_to_anchor=(0.5, 0.07),
+    )
     fig.suptitle("Accuracy against speed: errors over the answered queries of every scene family", y=0.995)
     fig.text(
         0.5,
         0.955,
-        _subtitle(raw) + f"  ·  error 0 drawn at {FLOOR:g}",
+        _subtitle(raw) + f"  ·  errors of {FLOOR:g} or less, 0 included, drawn at {FLOOR:g}",
         ha="center",
         fontsize=8,
         color="dimgray",
     )
-    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    _caption(fig, "accuracy_speed")
+    fig.tight_layout(rect=(0, 0.15, 1, 0.95))
     return _save(fig, path)
 
 
 def _speed_panel(ax, stats, unit, failures):
-    """One query type and unit: a worst and a median marker per entity; returns legend handles.
+    """One query type and unit: a worst and a median marker per entity.
+
+    Returns the legend handles and a note for the panel's title (empty
+    unless some error is beyond the top of the axis).
 
     Errors beyond the top of the axis are drawn on its edge with their value;
     with ``failures``, entities that left queries unanswered say how many.
@@ -179,7 +236,7 @@ def _speed_panel(ax, stats, unit, failures):
         if math.isfinite(e) and e <= CAP[unit]
     ]
     if not speeds:
-        return {}
+        return {}, ""
     ax.set_xlim(min(speeds) / 3, max(speeds) * 3)
     low, high = math.log10(max(min(errors), FLOOR)), math.log10(max(max(errors), FLOOR))
     top = min(high + 0.08 * (high - low) + 0.5, math.log10(CAP[unit]))
@@ -229,29 +286,29 @@ def _speed_panel(ax, stats, unit, failures):
                 fontsize=8,
                 color="firebrick",
             )
+    note = ""
     if off_scale:
         most = max(off_scale)
-        ax.set_title(
-            f"markers on the top edge: worst beyond {_short(10.0**top)}, up to "
-            + (_short(most) if math.isfinite(most) else "past the float range"),
-            fontsize=8,
-            color="firebrick",
+        note = f"markers on the top edge: worst beyond {_short(10.0**top)}, up to " + (
+            _short(most) if math.isfinite(most) else "past the float range"
         )
-    if unit == "error_eps_s":
-        ax.axhline(BOUND, color="gray", ls=":", lw=1)
-        ax.annotate(
-            "8 eps·S",
-            (1, BOUND),
-            xycoords=("axes fraction", "data"),
-            xytext=(-4, 3),
-            textcoords="offset points",
-            ha="right",
-            fontsize=8,
-            color="gray",
-        )
+    bound, label = (
+        (BOUND, "8 eps·S: robust's bound") if unit == "error_eps_s" else (1.0, "1 ulp: certified's bound")
+    )
+    ax.axhline(bound, color="gray", ls=":", lw=1)
+    ax.annotate(
+        label,
+        (1, bound),
+        xycoords=("axes fraction", "data"),
+        xytext=(-4, 3),
+        textcoords="offset points",
+        ha="right",
+        fontsize=8,
+        color="gray",
+    )
     ax.grid(True, which="major", alpha=0.3)
     _draw_front(ax, [points[i] for i in summary.pareto(points)])
-    return handles
+    return handles, note
 
 
 def _short(x):
@@ -331,6 +388,13 @@ def _axis_values(name, members):
     return members, list(range(len(values))), labels, "log steps, not to scale"
 
 
+def _floor_label(value, _position=None):
+    """A decade tick's label; the floor, where errors of 0 are drawn, reads ``≤0.01``."""
+    if math.isclose(value, FLOOR):
+        return f"≤{FLOOR:g}"
+    return f"$10^{{{round(math.log10(value))}}}$"
+
+
 def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
     """One sweep: the share of failed queries on ``ax_fail``, the worst error on ``ax``."""
     members, x, ticklabels, note = _axis_values(name, members)
@@ -345,7 +409,17 @@ def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
         answered = np.isfinite(worst)
         if answered.any():
             worst_seen = max(worst_seen, float(worst[answered].max()))
-        ax.plot(x[answered], _floor(worst[answered]), color=colour, marker=marker, ms=5, lw=1.3, label=entity)
+        # proximity's own methods on top: their errors are the small ones that others would hide.
+        ax.plot(
+            x[answered],
+            _floor(worst[answered]),
+            color=colour,
+            marker=marker,
+            ms=5,
+            lw=1.3,
+            label=entity,
+            zorder=3 if entity in ("robust", "certified") else 2,
+        )
         if failed.any():
             any_failure = True
             ax_fail.plot(x, failed, color=colour, marker=marker, ms=5, lw=1.3)
@@ -357,9 +431,10 @@ def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
     ax.axhline(BOUND, color="gray", ls="--", lw=0.8)
     ax.set_yscale("log")
     ax.set_ylim(FLOOR / 2, max(worst_seen * 10, 1e2))
-    from matplotlib.ticker import LogLocator, NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     ax.yaxis.set_major_locator(LogLocator(base=10.0, numticks=8))
+    ax.yaxis.set_major_formatter(FuncFormatter(_floor_label))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xticks(x, ticklabels)
     ax.grid(True, alpha=0.3)
@@ -394,7 +469,7 @@ def stability(raw, path, kinds, title):
         return None
     ncols = 3
     nrows = math.ceil(len(panels) / ncols)
-    height = 3.6 * nrows + 1.3
+    height = 3.6 * nrows + 1.7
     fig = plt.figure(figsize=(4.2 * ncols, height))
     outer = fig.add_gridspec(
         nrows,
@@ -404,7 +479,7 @@ def stability(raw, path, kinds, title):
         left=0.065,
         right=0.985,
         top=1 - 0.8 / height,
-        bottom=1.05 / height,
+        bottom=1.45 / height,
     )
     handles = {}
     for i, (kind, name, members) in enumerate(panels):
@@ -425,16 +500,25 @@ def stability(raw, path, kinds, title):
         Line2D([], [], color="gray", ls="--", lw=0.8),
         Line2D([], [], color="gray", ls=":", lw=1.2),
     ]
-    fig.legend(lines, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False)
+    fig.legend(
+        lines,
+        labels,
+        loc="lower center",
+        ncol=min(len(labels), 5),
+        frameon=False,
+        bbox_to_anchor=(0.5, 0.42 / height),
+    )
     fig.suptitle(title, y=1 - 0.1 / height)
     fig.text(
         0.5,
         1 - 0.42 / height,
-        _subtitle(raw) + f"  ·  harder to the right  ·  error 0 drawn at {FLOOR:g}",
+        _subtitle(raw)
+        + f"  ·  harder to the right  ·  errors of {FLOOR:g} or less, 0 included, drawn at {FLOOR:g}",
         ha="center",
         fontsize=8,
         color="dimgray",
     )
+    _caption(fig, Path(path).stem, y=0.1 / height)
     return _save(fig, path)
 
 
@@ -447,7 +531,7 @@ def tessellation(raw, path):
     if not records:
         return None
     plt = _plt()
-    fig, (ax_err, ax_time) = plt.subplots(1, 2, figsize=(13, 5.4))
+    fig, (ax_err, ax_time) = plt.subplots(1, 2, figsize=(13, 6.0))
     kind_style = {"disk": "-", "circle": "--"}
     curves = {}
     for r in records:
@@ -463,19 +547,10 @@ def tessellation(raw, path):
         worst = np.array([max((e for e in r["error"] if e is not None), default=math.nan) for r in rs])
         us = np.array([1e6 / r["timing"]["qps"] for r in rs])
         label = f"{name}, {kind}"
+        if (name, kind) in skipped:
+            label += f" (to K = {k[-1]}: time budget)"
         ax_err.plot(k, worst, color=colour, marker=marker, ls=kind_style[kind], label=label)
         ax_time.plot(k, us, color=colour, marker=marker, ls=kind_style[kind], label=label)
-        if (name, kind) in skipped:
-            ax_time.annotate(
-                "larger K: over the time budget",
-                (k[-1], us[-1]),
-                xytext=(8, -4),
-                textcoords="offset points",
-                ha="left",
-                va="top",
-                fontsize=7,
-                color=colour,
-            )
     if all_k:
         kk = np.geomspace(min(all_k), max(all_k), 200)
         s = np.sin(np.pi / (2 * kk))
@@ -483,12 +558,13 @@ def tessellation(raw, path):
     for r in records:
         if r["entity"] == "robust":
             worst = max((e for e in r["error"] if e is not None), default=0.0)
+            shown = f"{worst:.1e}" if worst > 0 else "0, drawn at 1e-17"
             ax_err.axhline(
                 max(worst, 1e-17),
                 color=style("robust")[0],
-                lw=1,
+                lw=1.5,
                 ls=kind_style[r["kind"]],
-                label=f"proximity robust, {r['kind']} (worst)",
+                label=f"proximity robust, {r['kind']}: worst error ({shown})",
             )
     for kind in ("disk", "circle"):
         family = next(
@@ -499,34 +575,32 @@ def tessellation(raw, path):
             ax_time.axhline(
                 1e6 / timing["qps"],
                 color=style("robust")[0],
-                lw=1,
+                lw=1.5,
                 ls=kind_style[kind],
-                label=f"proximity robust, {kind} (batch)",
+                label=f"proximity robust, {kind}: time per query in a batch",
             )
     for ax in (ax_err, ax_time):
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel("segments K")
-    ax_err.set_ylabel("worst |d − d*| for R = 1")
+        ax.set_xlabel("segments K (log scale)")
+    ax_err.set_ylabel("worst |d − d*| (R = 1, so in units of R)")
     ax_time.set_ylabel("time per query (µs)")
-    ax_err.set_title("error: the modelling error, R(1 − cos π/K), dominates")
-    ax_time.set_title("cost: grows with K")
-    handles, labels = [], []
+    ax_err.set_title("error against K (the libraries' lines lie on one another)")
+    ax_time.set_title("time per query against K")
+    # One legend per panel, under it: a line's label says which panel's quantity it is.
     for ax in (ax_err, ax_time):
-        for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
-            if label not in labels:
-                handles.append(h)
-                labels.append(label)
-    fig.legend(handles, labels, loc="lower center", ncol=4, frameon=False)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False, fontsize=8)
     n = records[0]["n"]
     fig.suptitle(
         "Tessellated circles and disks: error and cost against the number of segments K "
-        f"({n} queries, R = 1)",
+        f"({n} queries, R = 1; solid: disk, dashed: circle)",
         y=0.99,
     )
     fig.text(0.5, 0.935, _subtitle(raw), ha="center", fontsize=8, color="dimgray")
-    fig.tight_layout(rect=(0, 0.13, 1, 0.93))
+    _caption(fig, "tessellation")
+    # Fixed margins: tight_layout would shrink a panel to make room for the other's wider legend.
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.86, bottom=0.36, wspace=0.22)
     return _save(fig, path)
 
 

@@ -1,6 +1,6 @@
 """Meshes: proximity against trimesh and fcl, BVH build time and memory, in one run.
 
-    python -m benchmarks.meshes [--quick] [--out DIR] [--seed 0] [--readme README.md]
+    python -m benchmarks.meshes [--quick] [--out DIR] [--seed 0] [--write docs/performance.md]
     python -m benchmarks.meshes --crossover      # brute force against the BVH, n = 4..256
 
 The default run (about a minute) builds a torus of 20,000 triangles and two
@@ -519,8 +519,8 @@ def report(raw):
     return "\n".join(lines)
 
 
-def markdown(raw):
-    """The README's table of the run: throughput and ratios, build time, memory."""
+def markdown(raw, path="docs/performance.md"):
+    """The table of the run for the page at ``path``: throughput and ratios, build time, memory."""
     speed, meta = raw["speed"], raw["meta"]
     sizes = meta["sizes"]
     load = ", ".join(f"{x:.1f}" for x in meta["load_average"])
@@ -534,7 +534,7 @@ def markdown(raw):
         f"Points per second; proximity (`robust`, BVH) on all points, median of {sizes['repeats']} calls; "
         f"trimesh once on the first {sizes['trimesh']:,} points, fcl (a `BVHModel` and a `Sphere(0)` "
         f"moved per point) on the first {sizes['fcl']:,}. Made by `python -m benchmarks.meshes "
-        f"--readme README.md` on {meta['cpus']} cores shared with other jobs (load average {load}"
+        f"--write {path}` on {meta['cpus']} cores shared with other jobs (load average {load}"
         f"{threads}).",
         "",
         "| | near the surface | in the bounding box |",
@@ -583,15 +583,14 @@ def markdown(raw):
     return "\n".join(lines)
 
 
-def update_readme(path, text):
+def write_section(path, text):
     """Replace the text between the mesh-bench markers of ``path``."""
-    readme = Path(path).read_text(encoding="utf-8")
+    page = Path(path).read_text(encoding="utf-8")
     pattern = re.compile(r"(<!-- mesh-bench:start -->\n).*?(<!-- mesh-bench:end -->)", re.S)
-    if not pattern.search(readme):
+    if not pattern.search(page):
         raise SystemExit(f"{path} has no mesh-bench markers")
-    Path(path).write_text(
-        pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), readme), encoding="utf-8"
-    )
+    page = pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), page)
+    Path(path).write_text(page, encoding="utf-8")
 
 
 def crossover(seed=0, sizes=(4, 8, 12, 16, 24, 32, 48, 64, 128, 256), n_points=10_000, repeats=15, log=print):
@@ -641,7 +640,9 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="bench-results", help="directory for meshes.json")
     parser.add_argument("--crossover", action="store_true", help="brute force against the BVH, n = 4..256")
-    parser.add_argument("--readme", help="rewrite the mesh-bench section of this README from the run")
+    parser.add_argument(
+        "--write", metavar="PATH", help="rewrite the mesh-bench section of this page (docs/performance.md)"
+    )
     parser.add_argument("--memory-child", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.memory_child:
@@ -658,8 +659,8 @@ def main(argv=None):
     (out / "meshes.json").write_text(json.dumps(raw, indent=1))
     print(report(raw))
     print(f"raw data: {out / 'meshes.json'}")
-    if args.readme:
-        update_readme(args.readme, markdown(raw))
+    if args.write:
+        write_section(args.write, markdown(raw, args.write))
     return 0
 
 

@@ -1,4 +1,4 @@
-"""The benchmark report (``report.md``) and the README's benchmark section.
+"""The benchmark report (``report.md``) and the benchmark section of ``docs/benchmarks.md``.
 
 Both are drawn from the saved raw results (:func:`benchmarks.suite.load`),
 the charts already drawn from them (:mod:`benchmarks.charts`) and the saved
@@ -6,14 +6,16 @@ output of the speed step; nothing here measures anything.
 """
 
 import math
+import os
 import re
 import shutil
 from pathlib import Path
 
 from benchmarks import summary
+from benchmarks.charts import CAPTIONS
 
-#: The README section this module owns.
-README_MARKERS = ("<!-- bench:start -->", "<!-- bench:end -->")
+#: The section of the published page that this module owns.
+MARKERS = ("<!-- bench:start -->", "<!-- bench:end -->")
 
 CHART_TITLES = {
     "accuracy_speed": "Accuracy against speed",
@@ -45,8 +47,9 @@ def summary_table(raw):
     """Markdown: per query type and entity, speed, errors, failures."""
     lines = [
         "| query | method / backend | queries/s | worst (eps·S) | median (eps·S) "
-        "| worst (ulps of d*) | median (ulps of d*) | failed | beyond bound |",
-        "|---|---|---:|---:|---:|---:|---:|---|---:|",
+        "| worst (ulps of d*, d* > 0) | median (ulps of d*, d* > 0) | worst where d* = 0 (eps·S) "
+        "| failed | beyond bound |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---|---:|",
     ]
     for kind in summary.KINDS:
         kinds = dict(summary.entities(raw, kind))
@@ -55,7 +58,7 @@ def summary_table(raw):
             lines.append(
                 f"| point–{kind} | {label} | {num(s.qps)} | {num(s.worst['error_eps_s'])} "
                 f"| {num(s.median['error_eps_s'])} | {num(s.worst['error_ulps'])} "
-                f"| {num(s.median['error_ulps'])} | {_failed(s)} | {s.beyond} |"
+                f"| {num(s.median['error_ulps'])} | {num(s.on_shape_worst)} | {_failed(s)} | {s.beyond} |"
             )
     return "\n".join(lines)
 
@@ -83,9 +86,10 @@ def _provenance(raw):
 METHOD_NOTES = """\
 * **Errors** are `|d - d*|` against the exact reference (`tests/exact.py`: rational arithmetic on the
   floats' exact values), in two units: `eps·S`, with `eps = 2^-52` and `S = max_i |P - V_i|` for
-  triangles or `|P - C| + R` for disks and circles (`robust` promises at most 8), and ulps of `d*`.
-  Where `d* = 0` the ulp is the smallest subnormal, so only an exact 0 is 0 ulps; errors that large
-  in ulps overflow the float range and are shown as `> 1.8e308`.
+  triangles or `|P - C| + R` for disks and circles (`robust` promises at most 8), and ulps of `d*`
+  over the queries with `d* > 0`.  Where `d* = 0` (the point is on the shape) an ulp of `d*` would
+  be the smallest subnormal, which measures nothing; those queries have their own column, in
+  `eps·S`.  An error in ulps past the float range is shown as `> 1.8e308`.
 * **Statistics are over the answered queries.**  Queries without an answer are counted by reason
   instead: NaN, inf or an exception for proximity's methods; the adapters' failure codes for the
   libraries (`docs/adapters.md`): no result, sentinel, false touching, point off the shape,
@@ -271,6 +275,8 @@ def render(raw, charts, speed_text=None):
             "",
             f"![{CHART_TITLES.get(name, name)}]({Path(path).name})",
             "",
+            CAPTIONS.get(name, ""),
+            "",
         ]
     parts += ["## Where each one fails", "", *where_they_fail(raw)]
     counters = diagnostics(raw)
@@ -293,49 +299,49 @@ def write(raw, out, charts, speed_path=None):
     return path
 
 
-def readme_section(raw, charts, docs_prefix="docs/"):
-    """The README's benchmark section (between the markers), from the saved data."""
-    images = "\n\n".join(
-        f"![{CHART_TITLES.get(name, name)}]({docs_prefix}{Path(path).name})" for name, path in charts.items()
+def page_section(raw, charts, images=""):
+    """The benchmark section of the published page (between the markers), from the saved data.
+
+    ``images`` is the charts' directory relative to the page, ending in ``/`` (or empty).
+    """
+    figures = "\n\n".join(
+        f"![{CHART_TITLES.get(name, name)}]({images}{Path(path).name})\n\n{CAPTIONS.get(name, '')}"
+        for name, path in charts.items()
     )
     return f"""\
-`make bench` runs the suite (`python -m benchmarks`; `make bench-quick` for a smoke run with small
-batches): every method and every adapter backend on every scene family of `benchmarks/scenes.py`,
-with accuracy measured against the exact reference and speed timed separately.  It writes the raw
-results (`bench-results/raw.json`) first, then draws the charts and `bench-results/report.md`, with
-per-family tables, from them.  `python -m benchmarks --report-only --publish` redraws from the
-saved results and updates the charts under `docs/` and this section.
-
 The numbers below: {_provenance(raw)}
 
 {summary_table(raw)}
 
 Errors are over the answered queries, in units of `eps·S` (robust's bound is 8) and in ulps of `d*`
-(where `d* = 0` the ulp is the smallest subnormal); unanswered queries are counted under "failed",
-by reason.  "Beyond bound" counts answers outside the method's bound ({_bounds(raw)}; `eberly`,
-which promises nothing, against `robust`'s) or outside the backend's documented tolerance.  The
-libraries are timed through the adapters, which build a model per shape (one per query here); disks
-and circles they tessellate are off by the modelling error.
+over the queries with `d* > 0`; where `d* = 0` (the point is on the shape) the ulp would be the
+smallest subnormal, so those queries have their own column in `eps·S`.  Unanswered queries are
+counted under "failed", by reason.  "Beyond bound" counts answers outside the method's bound
+({_bounds(raw)}; `eberly`, which promises nothing, against `robust`'s) or outside the backend's
+documented tolerance.  The libraries are timed through the adapters, which build a model per shape
+(one per query here); disks and circles they tessellate are off by the modelling error.
 
 Where each one fails (families grouped by generator, with the swept values):
 
 {chr(10).join(where_they_fail(raw))}
 
-{images}
+## Charts
+
+{figures}
 """
 
 
-def publish(raw, charts, docs, readme):
-    """Copy the charts to ``docs`` and rewrite the section between the bench markers of ``readme``."""
-    docs = Path(docs)
+def publish(raw, charts, docs, page):
+    """Copy the charts to ``docs`` and rewrite the section between the bench markers of ``page``."""
+    docs, page = Path(docs), Path(page)
     docs.mkdir(parents=True, exist_ok=True)
     for path in charts.values():
         shutil.copyfile(path, docs / Path(path).name)
-    readme = Path(readme)
-    text = readme.read_text(encoding="utf-8")
-    start, end = README_MARKERS
+    text = page.read_text(encoding="utf-8")
+    start, end = MARKERS
     pattern = re.compile(re.escape(start) + r"\n.*?" + re.escape(end), re.S)
     if not pattern.search(text):
-        raise SystemExit(f"{readme} has no {start} ... {end} markers")
-    section = readme_section(raw, charts, docs_prefix=f"{docs.name}/")
-    readme.write_text(pattern.sub(lambda m: f"{start}\n{section}{end}", text, count=1), encoding="utf-8")
+        raise SystemExit(f"{page} has no {start} ... {end} markers")
+    relative = Path(os.path.relpath(docs, page.parent)).as_posix()
+    section = page_section(raw, charts, images="" if relative == "." else f"{relative}/")
+    page.write_text(pattern.sub(lambda m: f"{start}\n{section}{end}", text, count=1), encoding="utf-8")

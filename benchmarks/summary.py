@@ -3,7 +3,10 @@
 Everything here reads the dict written by :func:`benchmarks.suite.save`
 and nothing else, so that charts and tables can be redrawn from a saved run.
 Error statistics are over the answered rows only; rows without an answer
-are counted by reason instead.
+are counted by reason instead.  Errors in ulps of ``d*`` are over the rows
+with ``d* > 0``: where the exact distance is 0 its ulp is the smallest
+subnormal, and any error, however small against the query's size, is then
+some 1e300 ulps.  Those rows are summarised apart, in ``eps * S``.
 """
 
 import math
@@ -16,7 +19,7 @@ KINDS = ("triangle", "disk", "circle")
 #: Units of the error, as stored in each record, and how to say them.
 UNITS = {
     "error_eps_s": "eps·S",
-    "error_ulps": "ulps of d*",
+    "error_ulps": "ulps of d*, where d* > 0",
 }
 
 #: Readable names of the failure reasons.
@@ -49,8 +52,13 @@ class Stats:
         Answered queries beyond the entity's bound (``8 eps S`` for
         proximity's methods, the documented tolerance for backends).
     worst, median : dict of str to float
-        By unit (``error_eps_s``, ``error_ulps``), over the answered queries;
-        NaN when none was answered.
+        By unit (``error_eps_s``, ``error_ulps``), over the answered queries
+        (for ``error_ulps``, those with ``d* > 0``); NaN when there are none.
+    on_shape : int
+        Answered queries whose exact distance is 0 (the point is on the
+        shape), when the exact distances were given.
+    on_shape_worst : float
+        Worst error of those, in ``eps * S``; NaN when there are none.
     qps : float
         Queries per second: the median over families of each family's
         median timed repeat; NaN if never timed.
@@ -66,6 +74,8 @@ class Stats:
     median: dict = field(default_factory=dict)
     qps: float = math.nan
     failing_families: list = field(default_factory=list)
+    on_shape: int = 0
+    on_shape_worst: float = math.nan
 
     @property
     def failed(self):
@@ -73,22 +83,36 @@ class Stats:
         return self.n - self.answered
 
 
-def answered_errors(record, unit):
-    """Errors of the answered rows of one record, as floats (inf where stored as None)."""
+def answered_errors(record, unit, rows=None):
+    """Errors of the answered rows of one record, as floats (inf where stored as None).
+
+    ``rows``, a boolean mask, keeps only those rows.
+    """
     failed = {i for rows in record["failed"].values() for i in rows}
     return np.array(
-        [math.inf if e is None else e for i, e in enumerate(record[unit]) if i not in failed],
+        [
+            math.inf if e is None else e
+            for i, e in enumerate(record[unit])
+            if i not in failed and (rows is None or rows[i])
+        ],
         dtype=np.float64,
     )
 
 
-def stats(records, labels=None):
-    """Pool the records of one entity (one per family) into :class:`Stats`."""
+def stats(records, labels=None, exact=None):
+    """Pool the records of one entity (one per family) into :class:`Stats`.
+
+    ``exact`` holds each family's exact distances (``d_exact``); with them,
+    errors in ulps leave out the rows where ``d* = 0``, which are counted in
+    ``on_shape`` instead.
+    """
     labels = labels or [""] * len(records)
+    exact = exact or [None] * len(records)
     out = Stats()
     pooled = {unit: [] for unit in UNITS}
+    on_shape = []
     speeds = []
-    for label, record in zip(labels, records, strict=True):
+    for label, record, d_exact in zip(labels, records, exact, strict=True):
         n = len(record["error_eps_s"])
         out.n += n
         out.answered += record["answered"]
@@ -97,14 +121,22 @@ def stats(records, labels=None):
             out.failures[reason] = out.failures.get(reason, 0) + len(rows)
         if record["answered"] < n:
             out.failing_families.append(label)
+        zero = None if d_exact is None else np.asarray(d_exact, dtype=np.float64) == 0.0
         for unit in UNITS:
-            pooled[unit].append(answered_errors(record, unit))
+            rows = None if zero is None or unit != "error_ulps" else ~zero
+            pooled[unit].append(answered_errors(record, unit, rows))
+        if zero is not None and zero.any():
+            on_shape.append(answered_errors(record, "error_eps_s", zero))
         if record.get("timing"):
             speeds.append(record["timing"]["qps"])
     for unit in UNITS:
         errors = np.concatenate(pooled[unit]) if pooled[unit] else np.array([])
         out.worst[unit] = float(errors.max()) if len(errors) else math.nan
         out.median[unit] = float(np.median(errors)) if len(errors) else math.nan
+    if on_shape:
+        errors = np.concatenate(on_shape)
+        out.on_shape = len(errors)
+        out.on_shape_worst = float(errors.max()) if len(errors) else math.nan
     out.qps = float(np.median(speeds)) if speeds else math.nan
     return out
 
@@ -123,8 +155,9 @@ def by_kind(raw, kind):
     """``{entity: Stats}`` pooled over every family of a query type."""
     records = families(raw, kind)
     labels = [f["family"] for f in records]
+    exact = [f["d_exact"] for f in records]
     return {
-        name: stats([f["results"][name] for f in records], labels)
+        name: stats([f["results"][name] for f in records], labels, exact)
         for name, _ in entities(raw, kind)
         if all(name in f["results"] for f in records)
     }
@@ -133,7 +166,7 @@ def by_kind(raw, kind):
 def by_family(raw, kind):
     """``[(family record, {entity: Stats})]`` for a query type."""
     return [
-        (f, {name: stats([record], [f["family"]]) for name, record in f["results"].items()})
+        (f, {name: stats([record], [f["family"]], [f["d_exact"]]) for name, record in f["results"].items()})
         for f in families(raw, kind)
     ]
 

@@ -59,7 +59,7 @@ def closest_point(shape, points, *, method=DEFAULT_METHOD):
     method : {"robust", "certified", "eberly"}, keyword-only
         ``robust`` (default) is accurate to ``8 eps S`` on every finite input;
         ``certified`` is faithfully rounded (within one ulp of the exact
-        distance) with the exact closest feature; ``eberly`` is the seed's
+        distance) with the exact closest feature; ``eberly`` is Eberly's
         algorithm as written, kept as a baseline (NaN on zero-area
         triangles).
 

@@ -19,6 +19,16 @@ class Feature(enum.IntEnum):
     ``RIM``; circles ``RIM``.  ``NONE`` marks rows with no answer (a point
     containing NaN or inf).  Feature arrays hold these codes as ``int8`` and
     compare equal to the members.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> r = tri.closest_point([[2, 0, 0], [0.5, -1, 0], [0.2, 0.2, 1]])
+    >>> r.feature.tolist(), [proximity.Feature(f).name for f in r.feature]
+    ([1, 3, 6], ['VERTEX1', 'EDGE01', 'FACE'])
+    >>> bool(r.feature[2] == proximity.Feature.FACE)
+    True
     """
 
     NONE = -1
@@ -69,6 +79,17 @@ class Result:
         The closest point on the shape.
     feature : ndarray of int8, shape ``batch``
         :class:`Feature` code of the feature the closest point lies on.
+
+    Examples
+    --------
+    One point against one shape gives NumPy scalars and a :class:`Feature`:
+
+    >>> import proximity
+    >>> r = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).closest_point([0, 0, 2])
+    >>> float(r.distance), float(r.sqr_distance), r.point.tolist(), r.feature
+    (2.0, 4.0, [0.0, 0.0, 0.0], <Feature.VERTEX0: 0>)
+    >>> isinstance(r, proximity.Result)
+    True
     """
 
     distance: np.ndarray
@@ -106,11 +127,22 @@ class TriangleResult(Result):
     ----------
     barycentric : ndarray of float64, shape ``batch + (3,)``
         Weights ``(b0, b1, b2)`` of the vertices, summing to 1, with
-        ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the seed's
-        notation ``(s, t) = (b1, b2)``.  On the face of a sliver of height
+        ``point = b0 V0 + b1 V1 + b2 V2`` (up to rounding).  In the notation
+        of Eberly's *Distance Between Point and Triangle in 3D*,
+        ``(s, t) = (b1, b2)``.  On the face of a sliver of height
         ``h`` they are determined only to about ``eps * S / h`` (points that
         close together have barycentrics that far apart); ``point`` and
         ``distance`` keep their accuracy there.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> r = tri.closest_point([[0.25, 0.25, 1.0], [1, 1, 0]])
+    >>> r.barycentric.tolist()
+    [[0.5, 0.25, 0.25], [0.0, 0.5, 0.5]]
+    >>> r.point.tolist()
+    [[0.25, 0.25, 0.0], [0.5, 0.5, 0.0]]
     """
 
     barycentric: np.ndarray
@@ -127,6 +159,16 @@ class DiskResult(Result):
         normal as given.
     radial : ndarray of float64, shape ``batch``
         Distance of the point from the disk's axis.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> r = disk.closest_point([[3, 0, -2], [0.5, 0, 2]])
+    >>> r.height.tolist(), r.radial.tolist(), [proximity.Feature(f).name for f in r.feature]
+    ([-2.0, 2.0], [3.0, 0.5], ['RIM', 'FACE'])
+    >>> r.distance.round(6).tolist()
+    [2.828427, 2.0]
     """
 
     height: np.ndarray
@@ -143,6 +185,16 @@ class CircleResult(DiskResult):
         True where the point lies on the circle's axis (to within the
         rounding of ``radial``): every point of the circle is then closest,
         and ``point`` is one of them, chosen deterministically.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> ring = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    >>> r = ring.closest_point([[0, 0, 1], [2, 0, 0]])
+    >>> r.equidistant.tolist(), r.distance.round(6).tolist()
+    ([True, False], [1.414214, 1.0])
+    >>> r.height.tolist(), r.radial.tolist()
+    ([1.0, 0.0], [0.0, 2.0])
     """
 
     equidistant: np.ndarray
@@ -159,6 +211,16 @@ class MeshResult(TriangleResult):
         point; ``barycentric`` and ``feature`` refer to that face.  Among
         faces at the same computed distance, the lowest index.  -1 where
         the row has no answer.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity
+    >>> square = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    >>> r = square.closest_point([[0.75, 0.25, 1.0], [0.25, 0.75, 1.0], [np.nan, 0, 0]])
+    >>> r.face.tolist(), r.distance.tolist()
+    ([0, 1, -1], [1.0, 1.0, nan])
+    >>> r.barycentric[0].tolist()    # of face 0's vertices 0, 1, 2
+    [0.25, 0.5, 0.25]
     """
 
     face: np.ndarray
@@ -186,6 +248,19 @@ class SceneResult(Result):
     equidistant : ndarray of bool, shape ``batch``
         As in :class:`CircleResult` where the nearest primitive is a
         circle; False otherwise.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> scene = proximity.Scene([
+    ...     proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+    ...     proximity.Disk(center=[0, 0, 5], normal=[0, 0, 1], radius=1.0),
+    ... ])
+    >>> r = scene.closest_point([[0.2, 0.2, 1.0], [0.0, 0.0, 4.5]])
+    >>> r.distance.tolist(), r.primitive.tolist(), r.source.tolist()
+    ([1.0, 0.5], [0, 1], [0, 1])
+    >>> r.height.tolist()    # NaN where the nearest primitive is a triangle
+    [nan, -0.5]
     """
 
     primitive: np.ndarray
@@ -210,7 +285,7 @@ _LAST3 = slice(6, 9)
 def triangle_from_row(row):
     """:class:`TriangleResult` of one fast-path query."""
     # Written out, not built on _round_from_row's common fields: this is the
-    # call timed against fcl in a Python loop, where a call frame is 4%.
+    # one-point call made from Python loops, where one more call frame shows.
     result = _new(TriangleResult)
     fields = result.__dict__
     fields["distance"] = row[0]

@@ -21,14 +21,9 @@ from .shapes import DEFAULT_METHOD, Circle, Disk, Triangle
 BROAD_PHASES = ("auto", "brute", "bvh")
 
 #: Largest number of primitives for which ``broad_phase="auto"`` uses brute
-#: force.  Measured with ``python -m benchmarks.meshes --crossover`` on the
-#: development machine (2 cores, numba 0.68): 10,000 points uniform in the
-#: bounding box of n random triangles of size 0.2 in a unit cube, one
-#: thread, least of 15 calls, ``robust``, three seeds.  Up to n = 4 the two
-#: took the same time (to 2%): a hierarchy of at most ``LEAF_SIZE`` = 4
-#: primitives is a single leaf.  From n = 5 on the hierarchy was faster, by
-#: 10-20% up to n = 12 and by a factor 2 at n = 128, because it tests the
-#: primitives nearest the point first and so skips more of the others.
+#: force: up to ``LEAF_SIZE`` primitives the hierarchy is a single leaf and
+#: saves nothing.  Measured with ``python -m benchmarks.meshes --crossover``;
+#: the measurement is in ``docs/performance.md``.
 BRUTE_FORCE_MAX = 4
 
 _KIND_NAMES = ("triangle", "disk", "circle")

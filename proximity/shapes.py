@@ -41,6 +41,20 @@ class Shape(Protocol):
         Dimension ``D`` of the space the shape lives in.
     methods : tuple of str
         The values ``method`` accepts.
+
+    Examples
+    --------
+    Every shape of the package is a ``Shape``; so is any object with these
+    attributes and methods:
+
+    >>> import numpy as np, proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> isinstance(tri, proximity.Shape), tri.batch_shape, tri.dim
+    (True, (), 3)
+    >>> proximity.Triangle(np.zeros((4, 3, 3))).batch_shape
+    (4,)
+    >>> "robust" in tri.methods
+    True
     """
 
     batch_shape: tuple
@@ -144,7 +158,7 @@ class _Facade:
                 kernel(row, args, points)
                 if exact_fallback:
                     self._certified_row(row, points)
-                row.setflags(False)
+                row.setflags(False)  # write=False, passed positionally: the faster call
                 return self._from_row(row)
         row = self._single(points, method)
         if row is not None:
@@ -295,9 +309,12 @@ class Circle(_Round):
     radius : array_like, shape ``batch``
         Radius, >= 0.  The batch dimensions of the three broadcast.
 
+    Notes
+    -----
     Method ``robust`` (default) decomposes ``P - C`` into height and radial
     terms and is accurate to ``8 eps (|P - C| + R)``; ``eberly`` is the
-    seed's formula as written, kept as a baseline.
+    formula of Eberly's *Distance Between Point and Circle or Disk in 3D*
+    as written, kept as a baseline.
 
     Examples
     --------
