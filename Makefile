@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
 	touch $(STAMP)
 
-# The package with its own dependencies alone, as `pip install proximity`
+# The package with its own dependencies alone, as `pip install proximity3d`
 # gives it, for the speed benchmark's start-up rows: with scipy installed (the
 # adapters extra needs it), Numba imports it while setting up its compiler.
 # NumPy, Numba and llvmlite are pinned to .venv's versions, so that the two
@@ -47,3 +47,8 @@ bench-quick: $(STAMP) $(CORE_STAMP)
 
 clean:
 	rm -rf $(VENV) $(CORE) bench-results .pytest_cache
+
+# Numba's cache of compiled kernels (index .nbi and data .nbc files), kept in
+# __pycache__ beside the sources; the next import compiles them again.
+clean-cache:
+	find proximity -name '*.nbi' -delete -o -name '*.nbc' -delete

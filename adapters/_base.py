@@ -37,7 +37,7 @@ DEFAULT_RELATIVE_TOL = 1e-3
 #: is refused rather than silently loosened.
 MAX_SEGMENTS = 1 << 16
 
-INSTALL_HINT = "pip install 'proximity[adapters]'"
+INSTALL_HINT = "pip install 'proximity3d[adapters]'"
 
 
 class Failure(enum.IntEnum):

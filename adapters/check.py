@@ -1,7 +1,7 @@
 """Cross-check every installed backend against proximity on a generated scene.
 
-Run ``python -m adapters.check`` for the default scene, or
-``python -m adapters.check --help`` for the options.  The scene has groups
+Run ``python -m proximity.adapters.check`` for the default scene, or
+``python -m proximity.adapters.check --help`` for the options.  The scene has groups
 of well-conditioned triangles, disks and circles, and groups built to show
 each library's known failure modes: degenerate and sub-millimetre
 triangles, points on a triangle's face, points in a disk's plane.  trimesh is
@@ -106,7 +106,9 @@ def scene(n, seed=0):
 
 def main(argv=None):
     """Run the cross-check on the generated scene and print one table per group."""
-    parser = argparse.ArgumentParser(prog="python -m adapters.check", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m proximity.adapters.check", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed of the scene (default 0)")
     parser.add_argument("-n", type=int, default=40, help="rows per group of the scene (default 40)")
     parser.add_argument(
@@ -135,7 +137,7 @@ def main(argv=None):
     else:
         names = list(dict.fromkeys(args.backend))
     if not names:
-        print("no backend library is installed: pip install 'proximity[adapters]'", file=sys.stderr)
+        print("no backend library is installed: pip install 'proximity3d[adapters]'", file=sys.stderr)
         return 1
 
     start = time.perf_counter()

@@ -2,7 +2,7 @@
 
 The reference is proximity's most accurate method.  A backend's disagreement
 on a row is ``|d_backend - d_reference|``, over the rows it answered; rows it
-could not answer are counted by :class:`~adapters.Failure` reason instead.
+could not answer are counted by :class:`~proximity.adapters.Failure` reason instead.
 """
 
 import types
@@ -28,7 +28,7 @@ class Summary:
     answered : int
         Rows whose failure code is ``OK``.
     failures : mapping of str to int
-        Count of each other :class:`~adapters.Failure` reason that occurred.
+        Count of each other :class:`~proximity.adapters.Failure` reason that occurred.
     max_disagreement, median_disagreement : float
         Of ``|d - d_ref|`` over the answered rows (NaN if none).
     max_relative, median_relative : float
@@ -162,7 +162,7 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])

@@ -19,9 +19,9 @@ these are for watching the speed of one kernel while working on it, e.g.
 import dataclasses
 
 import numpy as np
+import proximity.adapters as adapters
 import pytest
 
-import adapters
 from benchmarks import accuracy, scenes
 
 BATCH = 100_000
