@@ -68,14 +68,14 @@ class Case:
     ratio: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CrossCheck:
     """The result of :func:`cross_check`.
 
     Attributes
     ----------
     shape : str
-        ``repr`` of the shape queried.
+        The shape queried, in a few words.
     reference : str
         The proximity method used as reference.
     summaries : tuple of Summary
@@ -99,8 +99,13 @@ class CrossCheck:
             f"no backend {backend!r} in this cross-check; have {[s.backend for s in self.summaries]}"
         )
 
+    def __str__(self):
+        return self.table()
+
+    __repr__ = __str__
+
     def table(self):
-        """The summaries and the worst cases as a plain-text table."""
+        """The summaries and the worst cases as a plain-text table (what ``print`` shows)."""
         rows = [
             ("backend", "model", "answered", "max |dd|/S", "median |dd|/S", "max |dd|", ">tol", "failures")
         ]
@@ -169,6 +174,10 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     >>> s = report.summary("trimesh")
     >>> s.answered, s.beyond_tolerance, s.max_disagreement <= 1e-3
     (20, 0, True)
+    >>> print(report)  # doctest: +ELLIPSIS
+    Circle of batch shape () against proximity certified
+    backend  model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
+    trimesh  ...    20/20     ...
     """
     from . import available, get
 
@@ -196,7 +205,16 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     finally:
         for instance in owned:
             instance.close()
-    return CrossCheck(shape=repr(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases))
+    return CrossCheck(
+        shape=_describe(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases)
+    )
+
+
+def _describe(shape):
+    batch = getattr(shape, "batch_shape", ())
+    if batch == () and hasattr(shape, "__len__"):
+        return f"{type(shape).__name__} of {len(shape)} primitives"
+    return f"{type(shape).__name__} of batch shape {batch}"
 
 
 def _summarise(name, r, reference, scale, point_rows, worst):

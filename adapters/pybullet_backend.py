@@ -88,7 +88,7 @@ RESET_EVERY = 1000
 
 def load():
     """Import pybullet, or raise an ImportError naming the extra to install."""
-    return import_library("pybullet", "pybullet")
+    return import_library("pybullet", "pybullet", quiet=True)  # without its build banner
 
 
 def _disconnect(pybullet, client):
