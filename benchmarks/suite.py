@@ -45,10 +45,10 @@ from pathlib import Path
 
 import numba
 import numpy as np
-import proximity.adapters as adapters
 
 import proximity
 from benchmarks import accuracy, scenes
+from proximity import adapters
 
 SCHEMA = 1
 

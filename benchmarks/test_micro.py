@@ -19,10 +19,10 @@ these are for watching the speed of one kernel while working on it, e.g.
 import dataclasses
 
 import numpy as np
-import proximity.adapters as adapters
 import pytest
 
 from benchmarks import accuracy, scenes
+from proximity import adapters
 
 BATCH = 100_000
 BACKEND_BATCH = 256

@@ -14,7 +14,7 @@ primitive for small scenes, a bounding-volume hierarchy above
 import numpy as np
 
 from . import _threads
-from ._validate import as_float64
+from ._validate import as_float64, frozen
 from .results import SceneResult
 from .shapes import DEFAULT_METHOD, Circle, Disk, Frozen, Triangle, check_method, keyword_only
 
@@ -241,7 +241,7 @@ class Scene(_Nearest):
             broad_phase=resolved,
             methods=methods,
             _tree=tree,
-            _kinds=kinds,
+            _kinds=frozen(kinds, dtype=np.int8, new=True),
             _has_circles=bool((kinds == 2).any()),
         )
 

@@ -12,16 +12,16 @@ import gc
 import importlib
 import math
 import pathlib
+import subprocess
 import sys
 
 import numpy as np
-import proximity.adapters as adapters
 import pytest
-from proximity.adapters import Failure
-from proximity.adapters._base import EPS, error_scale, plane_frame, sagitta, segments_for
 
 import proximity
-from proximity import Circle, Disk, Feature, Triangle
+from proximity import Circle, Disk, Feature, Triangle, adapters
+from proximity.adapters import Failure
+from proximity.adapters._base import EPS, error_scale, plane_frame, sagitta, segments_for
 
 LIBRARIES = {"fcl": "fcl", "trimesh": "trimesh", "pybullet": "pybullet"}
 
@@ -601,4 +601,28 @@ def test_check_command_prints_a_table_per_group(capsys):
         assert label in out
     for name in adapters.available():
         assert f"\n{name} " in out
+        verdicts = [line for line in out.splitlines() if line.startswith(f"{name}: ")]
+        assert len(verdicts) == 1 and "documented tolerance" in verdicts[0]
     assert "largest disagreements" in out
+    assert out.startswith("Each table compares") and "  >tol " in out and "## verdict" in out
+
+
+def test_check_command_prints_no_library_banner():
+    pytest.importorskip("pybullet")
+    done = subprocess.run(
+        [sys.executable, "-m", "proximity.adapters.check", "-n", "1", "--backend", "pybullet"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "build time" not in done.stdout + done.stderr
+    assert done.stdout.startswith("Each table compares")
+
+
+def test_cross_check_prints_as_its_table():
+    pytest.importorskip("trimesh")
+    disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    report = adapters.cross_check(disk, [[0.5, 0, 2], [3, 0, 0]], backends=["trimesh"])
+    assert str(report) == repr(report) == report.table()
+    assert report.table().startswith("Disk of batch shape () against proximity")
