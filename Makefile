@@ -22,7 +22,7 @@ $(DOCS_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[docs]"
 	touch $(DOCS_STAMP)
 
-# The package with its own dependencies alone, as `pip install proximity`
+# The package with its own dependencies alone, as `pip install proximity3d`
 # gives it, for the speed benchmark's start-up rows: with scipy installed (the
 # adapters extra needs it), Numba imports it while setting up its compiler.
 # NumPy, Numba and llvmlite are pinned to .venv's versions, so that the two
@@ -58,3 +58,8 @@ docs: $(DOCS_STAMP)
 
 clean:
 	rm -rf $(VENV) $(CORE) bench-results .pytest_cache docs/_build
+
+# Numba's cache of compiled kernels (index .nbi and data .nbc files), kept in
+# __pycache__ beside the sources; the next import compiles them again.
+clean-cache:
+	find proximity -name '*.nbi' -delete -o -name '*.nbc' -delete

@@ -10,7 +10,7 @@ them all and proximity itself, and summarises the disagreements.
 
 Examples
 --------
->>> import adapters, proximity
+>>> import proximity, proximity.adapters as adapters
 >>> names = adapters.available()     # those whose library is installed
 >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
 >>> with adapters.get("trimesh") as backend:     # a fan of K triangles, K from the tolerance
@@ -108,7 +108,7 @@ def get(name, **options):
     ------
     ImportError
         If the library is not installed; the message names the extra to
-        install: ``pip install 'proximity[adapters]'``.
+        install: ``pip install 'proximity3d[adapters]'``.
     ValueError
         For an unknown name.
 

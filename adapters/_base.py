@@ -16,10 +16,14 @@ since a library that returns absolute coordinates cannot round them to
 better than ``eps * M``.
 """
 
+import contextlib
+import ctypes
 import enum
 import functools
 import importlib
 import importlib.metadata
+import os
+import sys
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -37,7 +41,7 @@ DEFAULT_RELATIVE_TOL = 1e-3
 #: is refused rather than silently loosened.
 MAX_SEGMENTS = 1 << 16
 
-INSTALL_HINT = "pip install 'proximity[adapters]'"
+INSTALL_HINT = "pip install 'proximity3d[adapters]'"
 
 
 class Failure(enum.IntEnum):
@@ -215,9 +219,34 @@ class BackendResult:
         return np.asarray(self.failure) == Failure.OK
 
 
-def import_library(module, distribution):
-    """Import ``module`` or raise an ImportError that names the extra to install."""
+@contextlib.contextmanager
+def _quiet_output():
+    """Send what C code prints (file descriptors 1 and 2) to /dev/null."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
     try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        ctypes.CDLL(None).fflush(None)  # C's buffered output goes to /dev/null too
+        for fd, copy in zip((1, 2), saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
+def import_library(module, distribution, *, quiet=False):
+    """Import ``module`` or raise an ImportError that names the extra to install.
+
+    ``quiet`` silences what the library prints while it loads (pybullet's
+    build banner).
+    """
+    try:
+        if quiet and module not in sys.modules and os.name == "posix":
+            with _quiet_output():
+                return importlib.import_module(module)
         return importlib.import_module(module)
     except ImportError as exc:
         raise ImportError(

@@ -1,7 +1,7 @@
 """Cross-check every installed backend against proximity on a generated scene.
 
-Run ``python -m adapters.check`` for the default scene, or
-``python -m adapters.check --help`` for the options.  The scene has groups
+Run ``python -m proximity.adapters.check`` for the default scene, or
+``python -m proximity.adapters.check --help`` for the options.  The scene has groups
 of well-conditioned triangles, disks and circles, and groups built to show
 each library's known failure modes: degenerate and sub-millimetre
 triangles, points on a triangle's face, points in a disk's plane.  trimesh is
@@ -106,7 +106,9 @@ def scene(n, seed=0):
 
 def main(argv=None):
     """Run the cross-check on the generated scene and print one table per group."""
-    parser = argparse.ArgumentParser(prog="python -m adapters.check", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m proximity.adapters.check", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed of the scene (default 0)")
     parser.add_argument("-n", type=int, default=40, help="rows per group of the scene (default 40)")
     parser.add_argument(
@@ -135,25 +137,64 @@ def main(argv=None):
     else:
         names = list(dict.fromkeys(args.backend))
     if not names:
-        print("no backend library is installed: pip install 'proximity[adapters]'", file=sys.stderr)
+        print("no backend library is installed: pip install 'proximity3d[adapters]'", file=sys.stderr)
         return 1
 
     start = time.perf_counter()
     backends = [get("trimesh", rescale=False) if name == RAW_TRIMESH else get(name) for name in names]
+    print(LEGEND)
+    reports = []
     try:
         for label, shape, points in scene(args.n, args.seed):
             report = cross_check(shape, points, backends=backends, tol=args.tol, worst=1)
+            reports.append(report)
             print(f"## {label}")
             print(report.table())
             print()
     finally:
         for backend in backends:
             backend.close()
+    print("## verdict")
+    for backend in backends:
+        print(verdict(backend.name, [r.summary(backend.name) for r in reports]))
+    print()
     print(
         f"{len(backends)} backends, seed {args.seed}, {args.n} rows per group, "
         f"{time.perf_counter() - start:.1f} s"
     )
     return 0
+
+
+#: What the columns of the tables mean, printed before them.
+LEGEND = """\
+Each table compares every backend with proximity's most accurate method on one group of queries.
+  model          what the backend built (tessellated disks and circles say K and the modelling bound)
+  answered       rows with an answer; the others are counted under failures by reason
+  max |dd|/S     largest |d_backend - d_proximity| over answered rows, relative to the query's scale S
+  median |dd|/S  the median of the same
+  max |dd|       largest absolute disagreement, in length units
+  >tol           answered rows outside the tolerance the backend documents (0 is expected)
+  failures       rows not answered, by reason (the Failure codes of docs/adapters.md)
+"""
+
+
+def verdict(name, summaries):
+    """One line on a backend over every group: within its tolerance or not, and what it left unanswered."""
+    rows = sum(s.rows for s in summaries)
+    answered = sum(s.answered for s in summaries)
+    beyond = sum(s.beyond_tolerance for s in summaries)
+    failures = {}
+    for s in summaries:
+        for reason, count in s.failures.items():
+            failures[reason] = failures.get(reason, 0) + count
+    if beyond:
+        head = f"{name}: OUTSIDE its documented tolerance on {beyond} of {answered} answered rows"
+    else:
+        head = f"{name}: within its documented tolerance on all {answered} answered rows"
+    if failures:
+        listed = ", ".join(f"{reason} {count}" for reason, count in sorted(failures.items()))
+        return f"{head}; {rows - answered} of {rows} rows not answered ({listed})"
+    return f"{head}; every one of {rows} rows answered"
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 The reference is proximity's most accurate method.  A backend's disagreement
 on a row is ``|d_backend - d_reference|``, over the rows it answered; rows it
-could not answer are counted by :class:`~adapters.Failure` reason instead.
+could not answer are counted by :class:`~proximity.adapters.Failure` reason instead.
 """
 
 import types
@@ -28,7 +28,7 @@ class Summary:
     answered : int
         Rows whose failure code is ``OK``.
     failures : mapping of str to int
-        Count of each other :class:`~adapters.Failure` reason that occurred.
+        Count of each other :class:`~proximity.adapters.Failure` reason that occurred.
     max_disagreement, median_disagreement : float
         Of ``|d - d_ref|`` over the answered rows (NaN if none).
     max_relative, median_relative : float
@@ -86,14 +86,14 @@ class Case:
     ratio: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CrossCheck:
     """The result of :func:`cross_check`.
 
     Attributes
     ----------
     shape : str
-        ``repr`` of the shape queried.
+        The shape queried, in a few words.
     reference : str
         The proximity method used as reference.
     summaries : tuple of Summary
@@ -128,8 +128,13 @@ class CrossCheck:
             f"no backend {backend!r} in this cross-check; have {[s.backend for s in self.summaries]}"
         )
 
+    def __str__(self):
+        return self.table()
+
+    __repr__ = __str__
+
     def table(self):
-        """The summaries and the worst cases as a plain-text table."""
+        """The summaries and the worst cases as a plain-text table (what ``print`` shows)."""
         rows = [
             ("backend", "model", "answered", "max |dd|/S", "median |dd|/S", "max |dd|", ">tol", "failures")
         ]
@@ -191,13 +196,17 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
     >>> s = report.summary("trimesh")
     >>> s.answered, s.beyond_tolerance, s.max_disagreement <= 1e-3
     (20, 0, True)
+    >>> print(report)  # doctest: +ELLIPSIS
+    Circle of batch shape () against proximity certified
+    backend  model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
+    trimesh  ...    20/20     ...
     """
     from . import available, get
 
@@ -225,7 +234,16 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     finally:
         for instance in owned:
             instance.close()
-    return CrossCheck(shape=repr(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases))
+    return CrossCheck(
+        shape=_describe(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases)
+    )
+
+
+def _describe(shape):
+    batch = getattr(shape, "batch_shape", ())
+    if batch == () and hasattr(shape, "__len__"):
+        return f"{type(shape).__name__} of {len(shape)} primitives"
+    return f"{type(shape).__name__} of batch shape {batch}"
 
 
 def _summarise(name, r, reference, scale, point_rows, worst):

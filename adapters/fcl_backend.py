@@ -60,7 +60,7 @@ class FclBackend(Backend):
 
     Examples
     --------
-    >>> import proximity, adapters
+    >>> import proximity, proximity.adapters as adapters
     >>> good = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
     >>> collinear = [[0, 0, 0], [1, 0, 0], [3, 0, 0]]
     >>> with adapters.get("fcl") as fcl:

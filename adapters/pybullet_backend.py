@@ -88,7 +88,7 @@ RESET_EVERY = 1000
 
 def load():
     """Import pybullet, or raise an ImportError naming the extra to install."""
-    return import_library("pybullet", "pybullet")
+    return import_library("pybullet", "pybullet", quiet=True)  # without its build banner
 
 
 def _disconnect(pybullet, client):
@@ -111,7 +111,7 @@ class PybulletBackend(Backend):
 
     Examples
     --------
-    >>> import proximity, adapters
+    >>> import proximity, proximity.adapters as adapters
     >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> with adapters.get("pybullet") as pb:
     ...     r = pb.closest_point(disk, [[2.0, 0.0, 1.0]])

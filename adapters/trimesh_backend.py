@@ -47,7 +47,7 @@ face whose normal points most towards the query point, nearer or not: the
 distance can be too long by up to about ``1e-8 / (2 d)`` (5.5e-8 on a torus
 of 20,000 faces, for 2 of 200 points near its surface).  The answer is a
 point of the mesh at the distance reported, so the row stays ``OK``;
-:func:`adapters.cross_check` shows it as a disagreement beyond tolerance.
+:func:`proximity.adapters.cross_check` shows it as a disagreement beyond tolerance.
 """
 
 import numpy as np
@@ -74,7 +74,7 @@ class TrimeshBackend(Backend):
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> tiny = proximity.Triangle(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]]) * 1e-4)
     >>> p = [3e-5, 3e-5, 1e-4]  # above the face, at a height of 1e-4
     >>> with adapters.get("trimesh") as tm, adapters.get("trimesh", rescale=False) as raw:

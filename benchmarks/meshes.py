@@ -323,7 +323,7 @@ def measure_memory(what, n_points, n_major, n_minor, seed):
 
 def accuracy_record(label, vertices, faces, points, speed):
     """A family record in the format of :mod:`benchmarks.suite`, kind ``"mesh"``."""
-    import adapters
+    from proximity import adapters
 
     ref = reference(vertices, faces, points)
     mesh = proximity.TriangleMesh(vertices, faces)

@@ -3,7 +3,7 @@
 For each query type (triangle, disk, circle) and each family of
 :mod:`benchmarks.scenes`, the runner measures every *entity*: proximity's
 methods (whatever ``shape.methods`` offers) and every installed adapter
-backend (:mod:`adapters`, plus trimesh on the caller's coordinates,
+backend (:mod:`proximity.adapters`, plus trimesh on the caller's coordinates,
 ``trimesh[raw]``).  Three measurements, kept apart:
 
 accuracy
@@ -12,7 +12,7 @@ accuracy
     reference is computed once per family and shared.  Errors are recorded
     per query in two units: ulps of ``d*`` and ``eps * S``.  Rows with no
     answer are recorded by reason (NaN, inf, exception for proximity; the
-    :class:`adapters.Failure` code for backends) and get no error.
+    :class:`proximity.adapters.Failure` code for backends) and get no error.
 throughput
     A second seeded batch of the same family, timed with nothing else in
     the loop: the median over repeats of one ``closest_point`` call on ``n``
@@ -46,9 +46,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-import adapters
 import proximity
 from benchmarks import accuracy, scenes
+from proximity import adapters
 
 SCHEMA = 1
 

@@ -21,8 +21,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-import adapters
 from benchmarks import accuracy, scenes
+from proximity import adapters
 
 BATCH = 100_000
 BACKEND_BATCH = 256

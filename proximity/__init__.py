@@ -4,12 +4,25 @@ Point-triangle, point-circle and point-disk distance, on single points and
 NumPy batches, behind one shape protocol.
 """
 
-from . import _pool
-from ._counts import stats as certified_stats
-from .mesh import TriangleMesh
-from .results import CircleResult, DiskResult, Feature, MeshResult, Result, SceneResult, TriangleResult
-from .scene import Scene
-from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle
+from . import _threads
+
+_threads.configure()  # before any kernel: Numba picks its threading layer once
+
+from . import _pool  # noqa: E402
+from ._counts import stats as certified_stats  # noqa: E402
+from ._threads import threads  # noqa: E402
+from .mesh import TriangleMesh  # noqa: E402
+from .results import (  # noqa: E402
+    CircleResult,
+    DiskResult,
+    Feature,
+    MeshResult,
+    Result,
+    SceneResult,
+    TriangleResult,
+)
+from .scene import Scene  # noqa: E402
+from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle  # noqa: E402
 
 __all__ = [
     "Circle",
@@ -29,21 +42,28 @@ __all__ = [
     "closest_point",
     "distance",
     "release_memory",
+    "threads",
 ]
 
 __version__ = "0.1.0"
 
 
+_SHAPES = (Triangle, Circle, Disk, TriangleMesh, Scene)
+_SHAPE_TYPES = frozenset(_SHAPES)
+
+
 def _check(shape):
-    if not isinstance(shape, Shape):
-        raise TypeError(
-            "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
-            f"got {type(shape).__name__}"
-        )
-    return shape
+    # A set lookup on the exact class, not isinstance against the Protocol
+    # (which inspects every attribute): the function form costs what the method does.
+    if type(shape) in _SHAPE_TYPES or isinstance(shape, _SHAPES):
+        return shape
+    raise TypeError(
+        "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
+        f"got {type(shape).__name__}"
+    )
 
 
-def closest_point(shape, points, *, method=DEFAULT_METHOD):
+def closest_point(shape, points, *args, method=DEFAULT_METHOD):
     """Closest point on ``shape`` to each of ``points``.
 
     Parameters
@@ -76,15 +96,22 @@ def closest_point(shape, points, *, method=DEFAULT_METHOD):
     >>> r = proximity.closest_point(tri, [[2, 0, 0], [0.2, 0.2, -1], [np.nan, 0, 0]])
     >>> r.distance.tolist()
     [1.0, 1.0, nan]
-    >>> [proximity.Feature(f).name for f in r.feature]
+    >>> r.feature_name.tolist()
     ['VERTEX1', 'FACE', 'NONE']
     >>> r.barycentric[1].round(6).tolist()
     [0.6, 0.2, 0.2]
     """
-    return _check(shape).closest_point(points, method=method)
+    if type(shape) not in _SHAPE_TYPES:
+        _check(shape)
+    if args:
+        raise TypeError(
+            "closest_point() takes two positional arguments, shape and points; method is keyword-only: "
+            f"closest_point(shape, points, method={args[0]!r})"
+        )
+    return shape.closest_point(points, method=method)
 
 
-def distance(shape, points, *, method=DEFAULT_METHOD):
+def distance(shape, points, *args, method=DEFAULT_METHOD):
     """Distance from each of ``points`` to ``shape``.
 
     Parameters and broadcasting are those of :func:`closest_point`; only the
@@ -100,7 +127,14 @@ def distance(shape, points, *, method=DEFAULT_METHOD):
     >>> proximity.distance(disk, [[[0, 0, 1]], [[4, 0, 0]]]).shape
     (2, 1)
     """
-    return _check(shape).distance(points, method=method)
+    if type(shape) not in _SHAPE_TYPES:
+        _check(shape)
+    if args:
+        raise TypeError(
+            "distance() takes two positional arguments, shape and points; method is keyword-only: "
+            f"distance(shape, points, method={args[0]!r})"
+        )
+    return shape.distance(points, method=method)
 
 
 def release_memory():

@@ -1,39 +1,93 @@
 """Validation at the boundary: every check happens here, never in a kernel."""
 
+import dataclasses
+
 import numpy as np
+
+_REAL = frozenset("iuf")
+
+
+def _real(value, name, expected):
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
+    if array.dtype.kind not in _REAL:
+        raise ValueError(
+            f"{name} must be a real numeric array of shape {expected}; got dtype {array.dtype} "
+            f"with shape {array.shape}"
+        )
+    return array
 
 
 def as_float64(value, name, expected):
     """``value`` as a float64 array, or a ValueError naming ``name``.
 
-    Integers and float32 are converted; booleans, complex numbers, strings
-    and ragged sequences are refused.
+    Integers and float32 are converted; booleans, complex numbers, strings,
+    Python integers beyond the float range and ragged sequences are refused.
+    A float64 array comes back as it is, without a copy.
     """
-    try:
-        array = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
-    if array.dtype.kind not in "iuf":
-        raise ValueError(
-            f"{name} must be a real numeric array of shape {expected}; got dtype {array.dtype} "
-            f"with shape {array.shape}"
-        )
-    return np.asarray(array, dtype=np.float64)
+    return np.asarray(_real(value, name, expected), dtype=np.float64)
+
+
+def frozen_float64(value, name, expected):
+    """:func:`as_float64` and :func:`frozen` in one, copying the data at most once.
+
+    A list, or an array of another dtype, is converted into a new array,
+    which is then the only copy; a float64 array is passed to :func:`frozen`.
+    """
+    array = _real(value, name, expected)
+    if array.dtype != np.float64:
+        return frozen(array.astype(np.float64, order="C"), new=True)
+    if isinstance(value, (list, tuple)):
+        return frozen(array, new=array.flags.c_contiguous)
+    return frozen(array)
 
 
 def require_finite(array, name):
-    """Raise a ValueError naming the first non-finite entry of ``array``."""
-    bad = ~np.isfinite(array)
-    if bad.any():
-        index = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{name} must be finite; got {array[index]} at index {index}")
+    """Raise a ValueError naming the first non-finite entry of ``array``.
+
+    The minimum and maximum are finite exactly when every entry is (NaN
+    propagates through both), which checks a large array without a
+    temporary array of its size.
+    """
+    if array.size == 0 or (np.isfinite(array.min()) and np.isfinite(array.max())):
+        return
+    index = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
+    raise ValueError(f"{name} must be finite; got {array[index]} at index {index}")
 
 
-def frozen(array):
-    """A read-only array that does not share memory with the caller's."""
-    array = np.array(array, dtype=np.float64, copy=True)
-    array.flags.writeable = False
-    return array
+def _read_only_throughout(array):
+    while isinstance(array, np.ndarray):
+        if array.flags.writeable:
+            return False
+        array = array.base
+    return True
+
+
+def frozen(array, dtype=np.float64, new=False):
+    """A read-only C-contiguous array of ``dtype`` that the caller cannot change.
+
+    It is a new array (one copy, doing any conversion at the same time),
+    except for an array of ``dtype`` that is already C-contiguous and either
+    ``new`` (made by the caller for this purpose) or read-only down to the
+    memory it views, so that no one can write to it: that one is shared.
+    """
+    if (
+        isinstance(array, np.ndarray)
+        and array.dtype == dtype
+        and array.flags.c_contiguous
+        and (new or _read_only_throughout(array))
+    ):
+        owner = array
+    else:
+        owner = np.array(array, dtype=dtype, order="C", copy=True)
+    owner.flags.writeable = False
+    # A view: NumPy refuses to make writeable again a view whose base is
+    # read-only, where it lets the owner of the memory do so.
+    view = owner.view()
+    view.flags.writeable = False
+    return view
 
 
 def broadcast_batch(name_shapes, what):
@@ -43,3 +97,36 @@ def broadcast_batch(name_shapes, what):
     except ValueError:
         listed = ", ".join(f"{name} {shape}" for name, shape in name_shapes)
         raise ValueError(f"{what} do not broadcast: {listed}") from None
+
+
+def freeze_result(value):
+    """``value`` (an output array) read-only, down to every array it views.
+
+    An array that owns its memory could be made writeable again, so a view
+    of it stands in for it.
+    """
+    if value.base is None:
+        value.flags.writeable = False
+        value = value.view()
+    value.flags.writeable = False
+    base = value.base
+    while isinstance(base, np.ndarray):
+        base.flags.writeable = False
+        base = base.base
+    return value
+
+
+def freeze_fields(state):
+    """``state`` (an unpickled object's attributes) with every array read-only.
+
+    Arrays come back from a pickle writeable; so do those inside a frozen
+    dataclass, which is rebuilt with read-only ones.
+    """
+    frozen_state = {}
+    for name, value in state.items():
+        if isinstance(value, np.ndarray):
+            value = freeze_result(value)
+        elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+            value = dataclasses.replace(value, **freeze_fields(vars(value)))
+        frozen_state[name] = value
+    return frozen_state

@@ -12,8 +12,8 @@ every face, and why that never changes the answer, is in
 
 import numpy as np
 
-from ._validate import as_float64, require_finite
-from .results import MeshResult
+from ._validate import frozen, frozen_float64, require_finite
+from .results import MeshResult, format_repr
 from .scene import _Nearest
 from .shapes import Triangle
 
@@ -23,8 +23,9 @@ class TriangleMesh(_Nearest):
 
     Parameters
     ----------
-    vertices : array_like, shape ``(V, 3)``
-        Finite coordinates.
+    vertices : array_like, shape ``(V, 3)``, or a mesh object
+        Finite coordinates; or, with ``faces`` left out, any object with
+        ``vertices`` and ``faces`` attributes, such as a ``trimesh.Trimesh``.
     faces : array_like of int, shape ``(F, 3)``
         Indices into ``vertices``, ``0 <= index < V``; ``F >= 1``.  Faces may
         be degenerate and need not form a manifold: the mesh is a triangle
@@ -54,7 +55,7 @@ class TriangleMesh(_Nearest):
     >>> r = square.closest_point([[0.25, 0.75, 2.0], [2.0, 0.5, 0.0], [1.0, 1.0, 0.0]])
     >>> r.distance.tolist(), r.face.tolist()
     ([2.0, 1.0, 0.0], [1, 0, 0])
-    >>> [proximity.Feature(f).name for f in r.feature], r.point[1].tolist()
+    >>> r.feature_name.tolist(), r.point[1].tolist()
     (['FACE', 'EDGE12', 'VERTEX2'], [1.0, 0.5, 0.0])
     >>> float(proximity.distance(square, [0.5, 0.5, -3.0]))
     3.0
@@ -64,8 +65,15 @@ class TriangleMesh(_Nearest):
     methods = Triangle.methods
     _has_circles = False
 
-    def __init__(self, vertices, faces, *, broad_phase="auto"):
-        v = as_float64(vertices, "vertices", "(V, 3)")
+    def __init__(self, vertices, faces=None, *, broad_phase="auto"):
+        if faces is None:
+            if not (hasattr(vertices, "vertices") and hasattr(vertices, "faces")):
+                raise TypeError(
+                    "TriangleMesh takes vertices and faces, or one object with .vertices and .faces "
+                    f"(such as a trimesh.Trimesh); got a {type(vertices).__name__} and no faces"
+                )
+            vertices, faces = vertices.vertices, vertices.faces
+        v = frozen_float64(vertices, "vertices", "(V, 3)")
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must have shape (V, 3); got shape {v.shape}")
         require_finite(v, "vertices")
@@ -74,26 +82,20 @@ class TriangleMesh(_Nearest):
             raise ValueError(f"faces must be an integer array of shape (F, 3); got dtype {f.dtype}")
         if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] == 0:
             raise ValueError(f"faces must have shape (F, 3) with F >= 1; got shape {f.shape}")
-        bad = (f < 0) | (f >= len(v))
-        if bad.any():
+        if f.min() < 0 or f.max() >= len(v):
+            bad = (f < 0) | (f >= len(v))
             index = tuple(int(i) for i in np.argwhere(bad)[0])
             raise ValueError(
                 f"faces must index vertices, 0 <= index < {len(v)}; got {int(f[index])} at index {index}"
             )
-        v = np.array(v, dtype=np.float64)
-        f = np.array(f, dtype=np.int64)
-        v.flags.writeable = False
-        f.flags.writeable = False
+        f = frozen(f, dtype=np.int64, new=f is not faces and f.dtype == np.int64)
         params = np.zeros((len(f), 10))
         params[:, :9] = v[f].reshape(-1, 9)
         resolved, tree = self._tree_for(np.zeros(len(f), np.int8), params, broad_phase)
         self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree)
 
     def __repr__(self):
-        return (
-            f"TriangleMesh({len(self.vertices)} vertices, {len(self.faces)} faces, "
-            f"broad_phase={self.broad_phase!r})"
-        )
+        return format_repr(self, ("vertices", "faces"), broad_phase=self.broad_phase)
 
     def __len__(self):
         """Number of faces."""

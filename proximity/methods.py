@@ -99,5 +99,7 @@ def resolve(method):
     except (KeyError, TypeError):
         pass
     if not isinstance(method, str):
-        raise TypeError(f"method must be a string, one of {tuple(REGISTRY)}; got {type(method).__name__}")
+        raise TypeError(
+            f"method must be a str, one of {tuple(REGISTRY)}; got {type(method).__name__} {method!r}"
+        )
     raise ValueError(f"method must be one of {tuple(REGISTRY)}; got {method!r}")

@@ -2,13 +2,15 @@
 
 Results are frozen dataclasses of read-only arrays whose leading shape is the
 broadcast shape of the query; one point against one shape gives NumPy
-scalars (and a :class:`Feature` member).
+scalars.
 """
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
+
+from ._validate import freeze_fields, freeze_result
 
 
 class Feature(enum.IntEnum):
@@ -42,7 +44,30 @@ class Feature(enum.IntEnum):
     RIM = 7
 
 
-_FEATURES = {float(f): f for f in Feature}  # by code, as the kernels write it in a row
+    @classmethod
+    def names(cls, codes):
+        """The member names of an array of feature codes, as an array of str.
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> proximity.Feature.names(np.array([6, 0, -1], dtype=np.int8)).tolist()
+        ['FACE', 'VERTEX0', 'NONE']
+        >>> str(proximity.Feature.names(np.int8(7)))
+        'RIM'
+        """
+        codes = np.asarray(codes)
+        if codes.dtype.kind not in "iu":
+            raise TypeError(f"codes must be an integer array; got dtype {codes.dtype}")
+        if codes.size and (codes.min() < -1 or codes.max() >= len(_NAMES) - 1):
+            raise ValueError(f"codes must be Feature codes, -1 to {len(_NAMES) - 2}")
+        return _NAMES[codes.astype(np.intp) + 1]
+
+
+_NAMES = np.array([f.name for f in sorted(Feature)])  # by code + 1
+# One query's feature, by the code the kernels write in a row: a NumPy int8
+# scalar, as the feature arrays of batches hold.
+_FEATURES = {float(f): np.int8(f) for f in Feature}
 
 # Plain integer codes, for the compiled kernels (which compare ints).
 NONE = int(Feature.NONE)
@@ -60,11 +85,37 @@ def _frozen(value):
     if isinstance(value, np.ndarray):
         if value.ndim == 0:
             return value[()]
-        value.flags.writeable = False
+        return freeze_result(value)
     return value
 
 
-@dataclass(frozen=True)
+#: Print options of the reprs of shapes and results: big batches abbreviated.
+REPR_OPTIONS = {"threshold": 24, "edgeitems": 2}
+
+
+def format_repr(obj, names, **extra):
+    """``Type(name=array(...), ...)``, the arrays as NumPy prints them, then ``extra``."""
+    head = f"{type(obj).__name__}("
+    with np.printoptions(**REPR_OPTIONS):
+        parts = [(name, np.array_repr(np.asarray(getattr(obj, name)))) for name in names]
+    parts += [(name, repr(value)) for name, value in extra.items()]
+    flat = head + ", ".join(f"{name}={value}" for name, value in parts) + ")"
+    if "\n" not in flat and len(flat) <= 100:
+        return flat
+    if len(parts) == 1:
+        (name, value), pad = parts[0], len(head) + len(parts[0][0]) + 1
+        text = f"{head}{name}={_indent(value, pad)})"
+    else:
+        lines = [f"    {name}={_indent(value, 5 + len(name))}," for name, value in parts]
+        text = head + "\n" + "\n".join(lines) + "\n)"
+    return "\n".join(line.rstrip() for line in text.split("\n"))
+
+
+def _indent(text, width):
+    return text.replace("\n", "\n" + " " * width)
+
+
+@dataclass(frozen=True, repr=False)
 class Result:
     """Fields every query returns.
 
@@ -101,8 +152,30 @@ class Result:
         for name, value in vars(self).items():
             value = _frozen(value)
             if name == "feature" and not isinstance(value, np.ndarray):
-                value = Feature(int(value))
+                value = np.int8(value)
             object.__setattr__(self, name, value)
+
+    def __setstate__(self, state):
+        # Arrays come back from a pickle writeable: make them read-only again.
+        self.__dict__.update(freeze_fields(state))
+
+    def __repr__(self):
+        return format_repr(self, [f.name for f in fields(self)])
+
+    @property
+    def feature_name(self):
+        """The :class:`Feature` names of ``feature``: an array of str (a str for one point).
+
+        Examples
+        --------
+        >>> import proximity
+        >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        >>> tri.closest_point([[2, 0, 0], [0.2, 0.2, 1]]).feature_name.tolist()
+        ['VERTEX1', 'FACE']
+        >>> str(tri.closest_point([0.2, 0.2, 1]).feature_name)
+        'FACE'
+        """
+        return Feature.names(self.feature)
 
     def __getitem__(self, index):
         """The results of the queries at ``index`` of the batch.
@@ -111,15 +184,23 @@ class Result:
         --------
         >>> import proximity
         >>> r = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).closest_point([[2, 0, 0], [0, 0, 3]])
-        >>> r[1].feature, float(r[1].distance)
-        (<Feature.VERTEX0: 0>, 3.0)
+        >>> str(r[1].feature_name), float(r[1].distance)
+        ('VERTEX0', 3.0)
+        >>> r[1]
+        TriangleResult(
+            distance=array(3.),
+            sqr_distance=array(9.),
+            point=array([0., 0., 0.]),
+            feature=array(0, dtype=int8),
+            barycentric=array([ 1., -0.,  0.]),
+        )
         """
         if np.ndim(self.distance) == 0:
             raise IndexError("a single query's result has no batch to index")
         return type(self)(**{name: value[index] for name, value in vars(self).items()})
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class TriangleResult(Result):
     """Closest point on a triangle.
 
@@ -148,7 +229,7 @@ class TriangleResult(Result):
     barycentric: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DiskResult(Result):
     """Closest point on a disk.
 
@@ -175,7 +256,7 @@ class DiskResult(Result):
     radial: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CircleResult(DiskResult):
     """Closest point on a circle.
 
@@ -200,7 +281,7 @@ class CircleResult(DiskResult):
     equidistant: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class MeshResult(TriangleResult):
     """Closest point on a triangle mesh.
 
@@ -226,7 +307,7 @@ class MeshResult(TriangleResult):
     face: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class SceneResult(Result):
     """Closest point on a scene of triangles, disks and circles.
 

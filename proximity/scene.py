@@ -13,10 +13,10 @@ primitive for small scenes, a bounding-volume hierarchy above
 
 import numpy as np
 
-from ._validate import as_float64
-from .methods import resolve
+from . import _threads
+from ._validate import as_float64, frozen
 from .results import SceneResult
-from .shapes import DEFAULT_METHOD, Circle, Disk, Triangle
+from .shapes import DEFAULT_METHOD, Circle, Disk, Frozen, Triangle, check_method, keyword_only
 
 BROAD_PHASES = ("auto", "brute", "bvh")
 
@@ -29,7 +29,7 @@ BRUTE_FORCE_MAX = 4
 _KIND_NAMES = ("triangle", "disk", "circle")
 
 
-class _Nearest:
+class _Nearest(Frozen):
     """What meshes and scenes share: validation, broad phase and the query.
 
     Subclasses set ``_tree`` (the broad phase of :mod:`proximity.bvh`),
@@ -40,13 +40,6 @@ class _Nearest:
     batch_shape = ()
     dim = 3
 
-    def __setattr__(self, name, value):
-        raise AttributeError(f"{type(self).__name__} is immutable")
-
-    def _init(self, **fields):
-        for name, value in fields.items():
-            object.__setattr__(self, name, value)
-
     @staticmethod
     def _tree_for(kinds, params, broad_phase):
         """``(resolved broad phase, tree)`` for primitives ``kinds``, ``params``."""
@@ -54,28 +47,28 @@ class _Nearest:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
         if broad_phase == "auto":
             broad_phase = "brute" if len(kinds) <= BRUTE_FORCE_MAX else "bvh"
-        from . import bvh
+        with _threads.kernel():
+            from . import bvh
 
-        tree = bvh.build(kinds, params) if broad_phase == "bvh" else bvh.brute(kinds, params)
+            tree = bvh.build(kinds, params) if broad_phase == "bvh" else bvh.brute(kinds, params)
         return broad_phase, tree
 
     def _query(self, points, method, full):
-        method = resolve(method)
-        if method.name not in self.methods:
-            raise ValueError(f"method must be one of {self.methods}; got {method.name!r}")
+        method = check_method(method, self.methods)
         points = as_float64(points, "points", "(..., 3)")
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
-        from . import bvh
-
         out_shape = points.shape[:-1]
         # A method's closest point on a circle may leave the circle's box
         # (``Method.loose``); the hierarchy then bounds circles by the cube C +- R.
         loose = self._has_circles and method.loose
-        out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
+        with _threads.kernel():
+            from . import bvh
+
+            out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
         return out_shape, out
 
-    def distance(self, points, *, method=DEFAULT_METHOD):
+    def distance(self, points, *args, method=DEFAULT_METHOD):
         """Distance from each point to the nearest primitive.
 
         Parameters
@@ -96,10 +89,12 @@ class _Nearest:
         >>> ring.distance([[0, 0, 0], [1.5, 0, 0], [np.nan, 0, 0]]).tolist()
         [1.0, 0.5, nan]
         """
+        if args:
+            raise keyword_only(self, "distance", args)
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *, method=DEFAULT_METHOD):
+    def closest_point(self, points, *args, method=DEFAULT_METHOD):
         """Closest point, its distance and the nearest primitive, for each point.
 
         Parameters
@@ -124,6 +119,8 @@ class _Nearest:
         >>> r.distance.tolist(), r.face.tolist(), r.point[1].tolist()
         ([1.0, 1.0], [1, 0], [0.0, 1.0, 0.0])
         """
+        if args:
+            raise keyword_only(self, "closest_point", args)
         out_shape, out = self._query(points, method, full=True)
         fields = {name: value.reshape(out_shape + value.shape[1:]) for name, value in out.items()}
         return self._result(fields)
@@ -169,6 +166,8 @@ class Scene(_Nearest):
     >>> r = scene.closest_point([[0.2, 0.2, 4.0], [3.5, 0.0, 0.25]])
     >>> r.distance.tolist(), r.primitive.tolist(), r.source.tolist()
     ([1.0, 0.25], [1, 2], [0, 1])
+    >>> scene
+    Scene([<Triangle batch_shape=(2,)>, <Disk batch_shape=()>], broad_phase='brute')
     """
 
     __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds", "_has_circles")
@@ -228,7 +227,7 @@ class Scene(_Nearest):
             broad_phase=resolved,
             methods=methods,
             _tree=tree,
-            _kinds=kinds,
+            _kinds=frozen(kinds, dtype=np.int8, new=True),
             _has_circles=bool((kinds == 2).any()),
         )
 
@@ -237,7 +236,10 @@ class Scene(_Nearest):
         return int(self.offsets[-1])
 
     def __repr__(self):
-        return f"Scene({len(self.shapes)} shapes, {len(self)} primitives, broad_phase={self.broad_phase!r})"
+        shapes = ", ".join(_summary(shape) for shape in self.shapes[:4])
+        if len(self.shapes) > 4:
+            shapes += f", ... ({len(self.shapes) - 4} more)"
+        return f"Scene([{shapes}], broad_phase={self.broad_phase!r})"
 
     def _result(self, fields):
         index = fields.pop("index")
@@ -257,3 +259,10 @@ class Scene(_Nearest):
             radial=np.where(round_, extra[..., 1], np.nan),
             equidistant=flag & round_,
         )
+
+
+def _summary(shape):
+    """A shape in a few words: its class and batch, or its size."""
+    if isinstance(shape, _Nearest):
+        return f"<{type(shape).__name__} of {len(shape)} faces>"
+    return f"<{type(shape).__name__} batch_shape={shape.batch_shape}>"

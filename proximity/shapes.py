@@ -6,12 +6,20 @@ The kernels are imported on first use, so that ``import proximity`` does not
 pay for loading the compiler.
 """
 
+import types
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import _counts
-from ._validate import as_float64, broadcast_batch, frozen, require_finite
+from . import _counts, _threads
+from ._validate import (
+    as_float64,
+    broadcast_batch,
+    freeze_fields,
+    frozen,
+    frozen_float64,
+    require_finite,
+)
 from .methods import DEFAULT, REGISTRY, resolve
 from .results import (
     CircleResult,
@@ -20,12 +28,14 @@ from .results import (
     TriangleResult,
     circle_from_row,
     disk_from_row,
+    format_repr,
     triangle_from_row,
 )
 
 DEFAULT_METHOD = DEFAULT
 _FLOAT64 = np.dtype(np.float64)
 _POINT = (3,)
+_REAL = frozenset("iuf")
 _empty = np.empty
 
 
@@ -68,21 +78,87 @@ class Shape(Protocol):
         """Distance from each point to the shape; see :func:`proximity.distance`."""
 
 
-class _Facade:
-    """Shared query plumbing: points, method and output shape."""
+def check_method(method, methods):
+    """The :class:`~proximity.methods.Method` named ``method``, which must be one of ``methods``."""
+    resolved = resolve(method)
+    if resolved.name not in methods:
+        raise ValueError(f"method must be one of {methods}; got {method!r}")
+    return resolved
+
+
+def keyword_only(shape, function, args):
+    """The TypeError for ``method`` (or more) passed by position."""
+    name = f"{type(shape).__name__}.{function}"
+    return TypeError(
+        f"{name}() takes one positional argument, points; method is keyword-only: "
+        f"{function}(points, method={args[0]!r})"
+    )
+
+
+class Frozen:
+    """Immutability, pickling and per-class names, shared by every shape.
+
+    Each concrete class gets its own copies of the public methods it
+    inherits, named after it, so that Python's own argument errors name the
+    class the caller used.
+    """
 
     __slots__ = ()
-    methods = tuple(REGISTRY)
+    _public = ("__init__", "distance", "closest_point")
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__name__.startswith("_"):
+            return
+        for name in cls._public:
+            function = getattr(cls, name, None)
+            if name in cls.__dict__ or not isinstance(function, types.FunctionType):
+                continue
+            copy = types.FunctionType(
+                function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
+            )
+            copy.__kwdefaults__ = function.__kwdefaults__
+            copy.__doc__ = function.__doc__
+            copy.__qualname__ = f"{cls.__name__}.{name}"
+            copy.__module__ = cls.__module__
+            setattr(cls, name, copy)
 
     def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    def __delattr__(self, name):
         raise AttributeError(f"{type(self).__name__} is immutable")
 
     def _init(self, **fields):
         for name, value in fields.items():
             object.__setattr__(self, name, value)
 
+    def _slots(self):
+        for cls in type(self).__mro__:
+            yield from cls.__dict__.get("__slots__", ())
+
+    def __getstate__(self):
+        return {name: getattr(self, name) for name in self._slots()}
+
+    def __setstate__(self, state):
+        # Arrays come back from a pickle writeable: make them read-only again.
+        self._init(**freeze_fields(state))
+
+    def __copy__(self):
+        return self  # immutable
+
+    def __deepcopy__(self, memo):
+        return self  # immutable, and nothing it holds is shared writeably
+
+
+class _Facade(Frozen):
+    """Shared query plumbing: points, method and output shape."""
+
+    __slots__ = ()
+    methods = tuple(REGISTRY)
+
     def _prepare(self, points, method):
-        method = resolve(method)
+        method = check_method(method, self.methods)
         expected = f"(..., {self.dim})"
         points = as_float64(points, "points", expected)
         if points.ndim == 0 or points.shape[-1] != self.dim:
@@ -105,10 +181,15 @@ class _Facade:
         if self._args is None or type(method) is not str or method not in REGISTRY:
             return None
         if type(points) is not np.ndarray or points.dtype is not _FLOAT64:
+            # What the batch path accepts (see as_float64), and nothing else:
+            # for the rest, the batch path explains what is wrong.
             try:
-                points = np.asarray(points, dtype=np.float64)
-            except (TypeError, ValueError):
-                return None  # the batch path explains what is wrong with the input
+                points = np.asarray(points)
+            except (TypeError, ValueError, OverflowError):
+                return None
+            if points.dtype.kind not in _REAL:
+                return None
+            points = points.astype(_FLOAT64, copy=False)
         if points.shape != (3,):
             return None
         entry = self._entries.get(method)
@@ -136,16 +217,20 @@ class _Facade:
             self._kernels().exact_row(row, self._args, point)
         _counts.count(1, int(undecided))
 
-    def distance(self, points, *, method=DEFAULT_METHOD):
+    def distance(self, points, *args, method=DEFAULT_METHOD):
         """Distance from each point to the shape; see :func:`proximity.distance`."""
+        if args:
+            raise keyword_only(self, "distance", args)
         row = self._single(points, method)
         if row is not None:
             return row[0]
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *, method=DEFAULT_METHOD):
+    def closest_point(self, points, *args, method=DEFAULT_METHOD):
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
+        if args:
+            raise keyword_only(self, "closest_point", args)
         # One float64 point against a single shape is the drop-in narrow-phase
         # call, made once per pair from Python; it is :meth:`_single` written
         # out, because at a few microseconds a call every lookup counts.
@@ -188,8 +273,12 @@ class Triangle(_Facade):
     >>> import proximity
     >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     >>> r = tri.closest_point([0.25, 0.25, 2.0])
-    >>> float(r.distance), r.feature.name, r.point.tolist()
+    >>> float(r.distance), str(r.feature_name), r.point.tolist()
     (2.0, 'FACE', [0.25, 0.25, 0.0])
+    >>> tri
+    Triangle(vertices=array([[0., 0., 0.],
+                             [1., 0., 0.],
+                             [0., 1., 0.]]))
     >>> tri.distance([[2, 0, 0], [-1, -1, 0]]).round(6).tolist()
     [1.0, 1.414214]
     """
@@ -200,12 +289,11 @@ class Triangle(_Facade):
 
     def __init__(self, vertices):
         expected = "(..., 3, D) with D = 2 or 3"
-        v = as_float64(vertices, "vertices", expected)
+        v = frozen_float64(vertices, "vertices", expected)
         if v.ndim < 2 or v.shape[-2] != 3 or v.shape[-1] not in (2, 3):
             raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
         require_finite(v, "vertices")
-        v = frozen(v)
-        v3 = frozen(_to_3d(v))
+        v3 = v if v.shape[-1] == 3 else frozen(_to_3d(v), new=True)
         single = v.shape == (3, 3)
         self._init(
             vertices=v,
@@ -224,11 +312,12 @@ class Triangle(_Facade):
         return point_triangle
 
     def __repr__(self):
-        return f"Triangle(batch_shape={self.batch_shape}, dim={self.dim})"
+        return format_repr(self, ("vertices",))
 
     def _query(self, points, method, full):
         method, points, out_shape = self._prepare(points, method)
-        return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
+        with _threads.kernel():
+            return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
 
 
 class _Round(_Facade):
@@ -245,9 +334,9 @@ class _Round(_Facade):
         return point_disk
 
     def __init__(self, center, normal, radius):
-        c = as_float64(center, "center", "(..., 3)")
-        n = as_float64(normal, "normal", "(..., 3)")
-        r = as_float64(radius, "radius", "(...)")
+        c = frozen_float64(center, "center", "(..., 3)")
+        n = frozen_float64(normal, "normal", "(..., 3)")
+        r = frozen_float64(radius, "radius", "(...)")
         for name, a in (("center", c), ("normal", n)):
             if a.ndim == 0 or a.shape[-1] != 3:
                 raise ValueError(f"{name} must have shape (..., 3); got shape {a.shape}")
@@ -266,32 +355,33 @@ class _Round(_Facade):
         u = _unit(n)
         args = None
         if batch == ():
-            args = frozen(np.concatenate([[float(self._is_disk)], c, u, n, [r]]))
+            args = frozen(np.concatenate([[float(self._is_disk)], c, u, n, [r]]), new=True)
         self._init(
-            center=frozen(c),
-            normal=frozen(n),
-            radius=frozen(r),
+            center=c,
+            normal=n,
+            radius=r,
             batch_shape=batch,
-            _unit_normal=frozen(u),
+            _unit_normal=frozen(u, new=True),
             _args=args,
         )
 
     def __repr__(self):
-        return f"{type(self).__name__}(batch_shape={self.batch_shape})"
+        return format_repr(self, ("center", "normal", "radius"))
 
     def _query(self, points, method, full):
         method, points, out_shape = self._prepare(points, method)
-        out = self._kernels().query(
-            method,
-            self._is_disk,
-            self.center,
-            self._unit_normal,
-            self.normal,
-            self.radius,
-            points,
-            out_shape,
-            full,
-        )
+        with _threads.kernel():
+            out = self._kernels().query(
+                method,
+                self._is_disk,
+                self.center,
+                self._unit_normal,
+                self.normal,
+                self.radius,
+                points,
+                out_shape,
+                full,
+            )
         if self._is_disk and full:
             del out["equidistant"]
         return out_shape, out
@@ -340,8 +430,10 @@ class Disk(_Round):
     >>> import proximity
     >>> plate = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> r = plate.closest_point([[0.5, 0, 2], [3, 0, 0]])
-    >>> r.distance.tolist(), [f.name for f in map(proximity.Feature, r.feature)]
+    >>> r.distance.tolist(), r.feature_name.tolist()
     ([2.0, 2.0], ['FACE', 'RIM'])
+    >>> plate
+    Disk(center=array([0., 0., 0.]), normal=array([0., 0., 1.]), radius=array(1.))
     """
 
     __slots__ = ()

@@ -12,16 +12,16 @@ import gc
 import importlib
 import math
 import pathlib
+import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-import adapters
 import proximity
-from adapters import Failure
-from adapters._base import EPS, error_scale, plane_frame, sagitta, segments_for
-from proximity import Circle, Disk, Feature, Triangle
+from proximity import Circle, Disk, Feature, Triangle, adapters
+from proximity.adapters import Failure
+from proximity.adapters._base import EPS, error_scale, plane_frame, sagitta, segments_for
 
 LIBRARIES = {"fcl": "fcl", "trimesh": "trimesh", "pybullet": "pybullet"}
 
@@ -120,14 +120,14 @@ def test_available_lists_exactly_the_importable_libraries():
 def test_missing_library_names_the_extra_to_install(monkeypatch, name, module, distribution):
     monkeypatch.setitem(sys.modules, module, None)  # makes `import module` raise ImportError
     with pytest.raises(
-        ImportError, match=rf"{distribution} is not installed.*pip install 'proximity\[adapters\]'"
+        ImportError, match=rf"{distribution} is not installed.*pip install 'proximity3d\[adapters\]'"
     ):
         adapters.get(name)
     assert name not in adapters.available()
 
 
 def test_available_does_not_swallow_other_errors(monkeypatch):
-    from adapters import fcl_backend
+    from proximity.adapters import fcl_backend
 
     def broken():
         raise RuntimeError("the library is broken, not missing")
@@ -438,7 +438,7 @@ def test_pybullet_refuses_radius_zero_and_reports_at_most_16_points(bullet):
 
 def test_pybullet_does_not_leak_clients_or_bodies_over_10000_queries():
     p = pytest.importorskip("pybullet")
-    from adapters.pybullet_backend import RESET_EVERY
+    from proximity.adapters.pybullet_backend import RESET_EVERY
 
     rng = np.random.default_rng(7)
     backend = adapters.get("pybullet")
@@ -567,12 +567,12 @@ def test_cross_check_sees_trimesh_raw_disagreement_and_leaves_given_backends_ope
 @pytest.mark.parametrize(
     "module",
     [
-        "adapters",
-        "adapters._base",
-        "adapters.crosscheck",
-        "adapters.fcl_backend",
-        "adapters.trimesh_backend",
-        "adapters.pybullet_backend",
+        "proximity.adapters",
+        "proximity.adapters._base",
+        "proximity.adapters.crosscheck",
+        "proximity.adapters.fcl_backend",
+        "proximity.adapters.trimesh_backend",
+        "proximity.adapters.pybullet_backend",
     ],
 )
 def test_docstring_examples_run(module):
@@ -591,7 +591,7 @@ def test_documentation_examples_run():
 
 
 def test_check_command_prints_a_table_per_group(capsys):
-    from adapters import check
+    from proximity.adapters import check
 
     if not adapters.available():
         pytest.skip("no backend library installed")
@@ -601,4 +601,28 @@ def test_check_command_prints_a_table_per_group(capsys):
         assert label in out
     for name in adapters.available():
         assert f"\n{name} " in out
+        verdicts = [line for line in out.splitlines() if line.startswith(f"{name}: ")]
+        assert len(verdicts) == 1 and "documented tolerance" in verdicts[0]
     assert "largest disagreements" in out
+    assert out.startswith("Each table compares") and "  >tol " in out and "## verdict" in out
+
+
+def test_check_command_prints_no_library_banner():
+    pytest.importorskip("pybullet")
+    done = subprocess.run(
+        [sys.executable, "-m", "proximity.adapters.check", "-n", "1", "--backend", "pybullet"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "build time" not in done.stdout + done.stderr
+    assert done.stdout.startswith("Each table compares")
+
+
+def test_cross_check_prints_as_its_table():
+    pytest.importorskip("trimesh")
+    disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
+    report = adapters.cross_check(disk, [[0.5, 0, 2], [3, 0, 0]], backends=["trimesh"])
+    assert str(report) == repr(report) == report.table()
+    assert report.table().startswith("Disk of batch shape () against proximity")

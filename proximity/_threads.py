@@ -1,0 +1,153 @@
+"""Numba's threading layer: chosen so that forks and Python threads are safe.
+
+Numba runs the batch kernels on one of three threading layers, picked when
+the first parallel kernel is compiled or loaded, once per process:
+
+- ``tbb`` is safe under ``fork`` and under concurrent Python threads.  The
+  ``tbb`` package from the package index installs its library where the
+  dynamic loader does not look (``<prefix>/lib``), so it is loaded here,
+  by path, before Numba looks for it by name.
+- ``omp`` (GNU OpenMP on Linux) is thread-safe, but a child forked after it
+  has run is terminated.
+- ``workqueue`` survives ``fork`` but aborts the process when two Python
+  threads launch kernels at once: :func:`kernel` then runs the launches one
+  at a time.
+
+Unless the environment names a layer (``NUMBA_THREADING_LAYER``), the layer
+asked for is ``forksafe``: ``tbb`` where it can be loaded, else
+``workqueue`` on Linux and ``omp`` elsewhere.
+"""
+
+import contextlib
+import ctypes
+import os
+import site
+import sys
+import threading
+
+_ENV = "NUMBA_THREADING_LAYER"
+_LOCK = threading.RLock()
+_threadsafe = False  # set once the layer is known to be safe under threads
+
+
+def _tbb_paths():
+    name = {"linux": "libtbb.so.12", "darwin": "libtbb.12.dylib", "win32": "tbb12.dll"}.get(sys.platform)
+    if name is None:
+        return []
+    prefixes = [sys.prefix, getattr(site, "USER_BASE", None) or ""]
+    folder = "Library/bin" if sys.platform == "win32" else "lib"
+    return [os.path.join(prefix, folder, name) for prefix in prefixes if prefix]
+
+
+def _load_tbb():
+    """Load the TBB library installed beside this Python, if any; True if loaded."""
+    for path in _tbb_paths():
+        if os.path.exists(path):
+            try:
+                ctypes.CDLL(path, mode=ctypes.RTLD_GLOBAL)
+            except OSError:
+                continue
+            return True
+    return False
+
+
+def configure():
+    """Ask Numba for a fork-safe layer, unless the user chose one or it is running.
+
+    Called on ``import proximity``, before any kernel can be compiled.
+    """
+    if _ENV in os.environ:
+        if os.environ[_ENV].lower() in ("tbb", "safe", "forksafe", "default"):
+            _load_tbb()
+        return
+    _load_tbb()
+    numba = sys.modules.get("numba")
+    if numba is None:
+        # Numba reads its configuration from the environment when imported.
+        os.environ[_ENV] = "forksafe"
+        return
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized:
+        numba.config.THREADING_LAYER = "forksafe"
+
+
+def layer():
+    """The threading layer Numba runs, or None before the first parallel kernel."""
+    numba = sys.modules.get("numba")
+    if numba is None:
+        return None
+    try:
+        return numba.threading_layer()
+    except ValueError:
+        return None
+
+
+@contextlib.contextmanager
+def kernel():
+    """Around the launch of a batch kernel (and the first import of its
+    module, which may compile it): one thread at a time unless the layer is
+    known to be thread-safe."""
+    global _threadsafe
+    if _threadsafe:
+        yield
+        return
+    with _LOCK:
+        yield
+        current = layer()
+        if current is not None and current != "workqueue":
+            _threadsafe = True
+
+
+def default_threads():
+    """The number of threads Numba starts with: every core unless
+    ``NUMBA_NUM_THREADS`` says otherwise."""
+    import numba
+
+    return numba.config.NUMBA_NUM_THREADS
+
+
+@contextlib.contextmanager
+def threads(n=None):
+    """Run the queries of the enclosed block on ``n`` threads.
+
+    Parameters
+    ----------
+    n : int or None
+        Threads for the batch queries made in this Python thread, from 1 to
+        the number Numba started with (every core, unless the environment
+        variable ``NUMBA_NUM_THREADS`` says otherwise); None for all of them.
+        Single-point queries always run on the calling thread.
+
+    Notes
+    -----
+    This is Numba's own per-thread setting (``numba.set_num_threads``),
+    restored on leaving the block; it also applies to the user's own
+    parallel Numba code run inside it.  Other Python threads keep theirs.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> points = np.random.default_rng(0).normal(size=(100_000, 3))
+    >>> with proximity.threads(1):
+    ...     one = tri.distance(points)
+    >>> bool((one == tri.distance(points)).all())   # the same answers on every core
+    True
+    """
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    if n is None:
+        n = limit
+    if isinstance(n, bool) or not isinstance(n, int):
+        raise TypeError(f"n must be an int or None; got {type(n).__name__} {n!r}")
+    if not 1 <= n <= limit:
+        raise ValueError(f"n must be from 1 to {limit} (the threads Numba started); got {n}")
+    with kernel():
+        previous = numba.get_num_threads()  # starts the layer, as the first query would
+    numba.set_num_threads(n)
+    try:
+        yield n
+    finally:
+        numba.set_num_threads(previous)
