@@ -69,7 +69,7 @@ def available():
 
     Examples
     --------
-    >>> import adapters
+    >>> import proximity.adapters as adapters
     >>> adapters.NAMES
     ('fcl', 'trimesh', 'pybullet')
     >>> set(adapters.available()) <= set(adapters.NAMES)
@@ -114,7 +114,7 @@ def get(name, **options):
 
     Examples
     --------
-    >>> import proximity, adapters
+    >>> import proximity, proximity.adapters as adapters
     >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     >>> with adapters.get("trimesh") as backend:
     ...     r = backend.distance(tri, [[0.2, 0.2, 1.0], [2.0, 0.0, 0.0]])

@@ -55,7 +55,7 @@ class Failure(enum.IntEnum):
     fcl answers -1 for a point in a disk's plane inside the disk; that
     sentinel becomes NaN with the code ``SENTINEL``:
 
-    >>> import proximity, adapters
+    >>> import proximity, proximity.adapters as adapters
     >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> with adapters.get("fcl") as backend:
     ...     r = backend.closest_point(disk, [[0.5, 0, 0], [0.5, 0, 1]])
@@ -114,7 +114,7 @@ class Model:
 
     Examples
     --------
-    >>> import proximity, adapters
+    >>> import proximity, proximity.adapters as adapters
     >>> disk = proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> with adapters.get("fcl") as backend:
     ...     model = backend.closest_point(disk, [0, 0, 1]).model
@@ -176,7 +176,7 @@ class BackendResult:
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     >>> with adapters.get("trimesh") as backend:
     ...     r = backend.closest_point(tri, [[0.2, 0.2, 1.0], [np.nan, 0, 0]])

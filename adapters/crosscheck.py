@@ -39,7 +39,7 @@ class Summary:
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh")
@@ -68,7 +68,7 @@ class Case:
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> case = adapters.cross_check(circle, points, backends=["trimesh"], worst=1).worst[0]
@@ -104,14 +104,14 @@ class CrossCheck:
 
     Examples
     --------
-    >>> import numpy as np, proximity, adapters
+    >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
     >>> report.reference, [s.backend for s in report.summaries], len(report.worst)
     ('certified', ['trimesh'], 3)
     >>> print(report.table().splitlines()[0])
-    Circle(batch_shape=()) against proximity certified
+    Circle of batch shape () against proximity certified
     """
 
     shape: str

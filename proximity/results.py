@@ -133,12 +133,13 @@ class Result:
 
     Examples
     --------
-    One point against one shape gives NumPy scalars and a :class:`Feature`:
+    One point against one shape gives NumPy scalars; ``feature_name`` names
+    the :class:`Feature`:
 
     >>> import proximity
     >>> r = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).closest_point([0, 0, 2])
-    >>> float(r.distance), float(r.sqr_distance), r.point.tolist(), r.feature
-    (2.0, 4.0, [0.0, 0.0, 0.0], <Feature.VERTEX0: 0>)
+    >>> float(r.distance), float(r.sqr_distance), r.point.tolist(), str(r.feature_name)
+    (2.0, 4.0, [0.0, 0.0, 0.0], 'VERTEX0')
     >>> isinstance(r, proximity.Result)
     True
     """
