@@ -12,13 +12,13 @@ every face, and why that never changes the answer, is in
 
 import numpy as np
 
+from ._collection import Collection
 from ._validate import frozen, frozen_float64, require_finite
 from .results import MeshResult, format_repr
-from .scene import _Nearest
 from .shapes import Triangle
 
 
-class TriangleMesh(_Nearest):
+class TriangleMesh(Collection):
     """A mesh of triangles given by vertices and faces.
 
     Parameters

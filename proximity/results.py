@@ -43,7 +43,6 @@ class Feature(enum.IntEnum):
     FACE = 6
     RIM = 7
 
-
     @classmethod
     def names(cls, codes):
         """The member names of an array of feature codes, as an array of str.

@@ -13,120 +13,18 @@ primitive for small scenes, a bounding-volume hierarchy above
 
 import numpy as np
 
-from . import _threads
-from ._validate import as_float64, frozen
+from ._collection import BRUTE_FORCE_MAX, Collection
+from ._validate import frozen
+from .mesh import TriangleMesh
 from .results import SceneResult
-from .shapes import DEFAULT_METHOD, Circle, Disk, Frozen, Triangle, check_method, keyword_only
+from .shapes import Circle, Disk, Triangle
 
-BROAD_PHASES = ("auto", "brute", "bvh")
-
-#: Largest number of primitives for which ``broad_phase="auto"`` uses brute
-#: force: up to ``LEAF_SIZE`` primitives the hierarchy is a single leaf and
-#: saves nothing.  Measured with ``python -m benchmarks.meshes --crossover``;
-#: the measurement is in ``docs/performance.md``.
-BRUTE_FORCE_MAX = 4
+__all__ = ["BRUTE_FORCE_MAX", "Scene"]
 
 _KIND_NAMES = ("triangle", "disk", "circle")
 
 
-class _Nearest(Frozen):
-    """What meshes and scenes share: validation, broad phase and the query.
-
-    Subclasses set ``_tree`` (the broad phase of :mod:`proximity.bvh`),
-    ``methods`` and ``_has_circles``, and implement ``_result``.
-    """
-
-    __slots__ = ()
-    batch_shape = ()
-    dim = 3
-
-    @staticmethod
-    def _tree_for(kinds, params, broad_phase):
-        """``(resolved broad phase, tree)`` for primitives ``kinds``, ``params``."""
-        if broad_phase not in BROAD_PHASES:
-            raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
-        if broad_phase == "auto":
-            broad_phase = "brute" if len(kinds) <= BRUTE_FORCE_MAX else "bvh"
-        with _threads.kernel():
-            from . import bvh
-
-            tree = bvh.build(kinds, params) if broad_phase == "bvh" else bvh.brute(kinds, params)
-        return broad_phase, tree
-
-    def _query(self, points, method, full):
-        method = check_method(method, self.methods)
-        points = as_float64(points, "points", "(..., 3)")
-        if points.ndim == 0 or points.shape[-1] != 3:
-            raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
-        out_shape = points.shape[:-1]
-        # A method's closest point on a circle may leave the circle's box
-        # (``Method.loose``); the hierarchy then bounds circles by the cube C +- R.
-        loose = self._has_circles and method.loose
-        with _threads.kernel():
-            from . import bvh
-
-            out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
-        return out_shape, out
-
-    def distance(self, points, *args, method=DEFAULT_METHOD):
-        """Distance from each point to the nearest primitive.
-
-        Parameters
-        ----------
-        points : array_like, shape ``(..., 3)``
-        method : str, keyword-only
-            One of :attr:`methods`; default ``"robust"``.
-
-        Returns
-        -------
-        ndarray of float64, shape ``(...)``
-            A NumPy scalar for one point.  NaN where the point is not finite.
-
-        Examples
-        --------
-        >>> import numpy as np, proximity
-        >>> ring = proximity.Scene([proximity.Circle([0, 0, 0], [0, 0, 1], [1.0, 2.0])])
-        >>> ring.distance([[0, 0, 0], [1.5, 0, 0], [np.nan, 0, 0]]).tolist()
-        [1.0, 0.5, nan]
-        """
-        if args:
-            raise keyword_only(self, "distance", args)
-        out_shape, out = self._query(points, method, full=False)
-        return out["distance"].reshape(out_shape)[()]
-
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
-        """Closest point, its distance and the nearest primitive, for each point.
-
-        Parameters
-        ----------
-        points : array_like, shape ``(..., 3)``
-            Query points; rows containing NaN or inf give NaN, feature
-            ``NONE`` and index -1 in those rows only.
-        method : str, keyword-only
-            One of :attr:`methods`; default ``"robust"``.
-
-        Returns
-        -------
-        MeshResult or SceneResult
-            Frozen result of arrays of shape ``(...)``.
-
-        Examples
-        --------
-        >>> import proximity
-        >>> vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0]]
-        >>> fan = proximity.TriangleMesh(vertices, [[0, 1, 2], [0, 2, 3]])
-        >>> r = fan.closest_point([[-0.25, 0.25, 1.0], [0.0, 2.0, 0.0]])
-        >>> r.distance.tolist(), r.face.tolist(), r.point[1].tolist()
-        ([1.0, 1.0], [1, 0], [0.0, 1.0, 0.0])
-        """
-        if args:
-            raise keyword_only(self, "closest_point", args)
-        out_shape, out = self._query(points, method, full=True)
-        fields = {name: value.reshape(out_shape + value.shape[1:]) for name, value in out.items()}
-        return self._result(fields)
-
-
-class Scene(_Nearest):
+class Scene(Collection):
     """The nearest of a list of triangles, disks and circles.
 
     Parameters
@@ -173,8 +71,6 @@ class Scene(_Nearest):
     __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds", "_has_circles")
 
     def __init__(self, shapes, *, broad_phase="auto"):
-        from .mesh import TriangleMesh
-
         if isinstance(shapes, (Triangle, Disk, Circle, TriangleMesh)) or not isinstance(
             shapes, (list, tuple)
         ):
@@ -263,6 +159,6 @@ class Scene(_Nearest):
 
 def _summary(shape):
     """A shape in a few words: its class and batch, or its size."""
-    if isinstance(shape, _Nearest):
+    if isinstance(shape, Collection):
         return f"<{type(shape).__name__} of {len(shape)} faces>"
     return f"<{type(shape).__name__} batch_shape={shape.batch_shape}>"
