@@ -18,8 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import proximity
-from benchmarks import scenes
-from tests import exact
+from proximity.testing import exact, scenes
 
 METHODS = ("eberly", "robust")
 
@@ -64,7 +63,7 @@ def ulp_errors(distances, ref):
     """Errors of float distances in ulps of the exact distance ``d*``; inf where not finite.
 
     Where ``d* == 0`` the unit is the smallest subnormal, so that only an
-    exact zero is 0 ulps (see :func:`tests.exact.ulps`).
+    exact zero is 0 ulps (see :func:`proximity.testing.exact.ulps`).
     """
     return np.array([exact.ulps(float(d), d_exact) for d, (d_exact, _) in zip(distances, ref, strict=True)])
 

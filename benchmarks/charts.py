@@ -9,7 +9,7 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
     smallest subnormal and measures nothing), one marker per method or
     backend, with the Pareto front of those that answered every query.
 ``stability_triangle.png``, ``stability_round.png``
-    Each sweep of :mod:`benchmarks.scenes`: the worst error against the
+    Each sweep of :mod:`proximity.testing.scenes`: the worst error against the
     swept difficulty, one line per method or backend, over a strip that
     shows the share of queries with no answer, so that failures are seen
     where they begin.

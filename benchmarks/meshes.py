@@ -53,7 +53,7 @@ import numpy as np
 import proximity
 from benchmarks import accuracy
 from benchmarks.suite import timed
-from tests import exact
+from proximity.testing import exact
 
 EPS = 2.0**-52
 TARGETS = {"trimesh": 50.0, "fcl": 10.0}

@@ -84,7 +84,7 @@ def _provenance(raw):
 
 
 METHOD_NOTES = """\
-* **Errors** are `|d - d*|` against the exact reference (`tests/exact.py`: rational arithmetic on the
+* **Errors** are `|d - d*|` against the exact reference (`proximity/testing/exact.py`: rational arithmetic on the
   floats' exact values), in two units: `eps·S`, with `eps = 2^-52` and `S = max_i |P - V_i|` for
   triangles or `|P - C| + R` for disks and circles (`robust` promises at most 8), and ulps of `d*`
   over the queries with `d* > 0`.  Where `d* = 0` (the point is on the shape) an ulp of `d*` would
@@ -253,7 +253,7 @@ def render(raw, charts, speed_text=None):
         "",
         "## Summary",
         "",
-        "Errors and failures over every scene family of `benchmarks/scenes.py` "
+        "Errors and failures over every scene family of `proximity/testing/scenes.py` "
         f"({len(summary.families(raw, 'triangle'))} triangle families, "
         f"{len(summary.families(raw, 'disk'))} disk and circle families).",
         "",

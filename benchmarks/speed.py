@@ -41,7 +41,7 @@ import time
 import numpy as np
 
 import proximity
-from benchmarks import scenes
+from proximity.testing import scenes
 
 REPEATS = 5
 ROUNDS = 3

@@ -1,7 +1,7 @@
 """The benchmark runner: every method and backend on every scene family, in one run.
 
 For each query type (triangle, disk, circle) and each family of
-:mod:`benchmarks.scenes`, the runner measures every *entity*: proximity's
+:mod:`proximity.testing.scenes`, the runner measures every *entity*: proximity's
 methods (whatever ``shape.methods`` offers) and every installed adapter
 backend (:mod:`proximity.adapters`, plus trimesh on the caller's coordinates,
 ``trimesh[raw]``).  Three measurements, kept apart:

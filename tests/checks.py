@@ -12,7 +12,7 @@ from fractions import Fraction
 import mpmath
 import numpy as np
 
-from tests import exact
+from proximity.testing import exact
 
 BOUND = 8.0
 """The robust error bound, in units of ``eps * S``."""

@@ -1,4 +1,4 @@
-"""Hypothesis strategies over the scene families of ``benchmarks/scenes.py``.
+"""Hypothesis strategies over the scene families of ``proximity/testing/scenes.py``.
 
 Each strategy draws the family's parameter, a seed and a small size ``n``, and
 calls the generator with ``numpy.random.default_rng(seed)``; the scene is thus
@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from hypothesis import strategies as st
 
-from benchmarks import scenes
+from proximity.testing import scenes
 
 __all__ = [
     "DISK_FAMILIES",
@@ -76,28 +76,28 @@ def _or(strategy: Strategy | None, default: Strategy) -> Strategy:
 
 
 def well_conditioned_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.well_conditioned`."""
+    """Scenes of `proximity.testing.scenes.well_conditioned`."""
     return _scenes(scenes.well_conditioned, n)
 
 
 def near_surface_scenes(
     offset: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.near_surface`; `offset` defaults to 1e-15 to 1e-3."""
+    """Scenes of `proximity.testing.scenes.near_surface`; `offset` defaults to 1e-15 to 1e-3."""
     return _scenes(scenes.near_surface, n, offset=_or(offset, powers_of_ten(-15, -3)))
 
 
 def sliver_scenes(
     rel_height: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.sliver`; `rel_height` defaults to 1e-17 to 1e-6."""
+    """Scenes of `proximity.testing.scenes.sliver`; `rel_height` defaults to 1e-17 to 1e-6."""
     return _scenes(scenes.sliver, n, rel_height=_or(rel_height, powers_of_ten(-17, -6)))
 
 
 def degenerate_scenes(
     kind: Strategy[str] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.degenerate`; `kind` defaults to any kind."""
+    """Scenes of `proximity.testing.scenes.degenerate`; `kind` defaults to any kind."""
     kinds = st.sampled_from(["collinear", "two_coincident", "all_coincident"])
     return _scenes(scenes.degenerate, n, kind=_or(kind, kinds))
 
@@ -105,42 +105,42 @@ def degenerate_scenes(
 def needle_scenes(
     rel_width: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.needle`; `rel_width` defaults to 1e-15 to 0.1."""
+    """Scenes of `proximity.testing.scenes.needle`; `rel_width` defaults to 1e-15 to 0.1."""
     return _scenes(scenes.needle, n, rel_width=_or(rel_width, powers_of_ten(-15, -1)))
 
 
 def small_scenes(
     size: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.small`; `size` defaults to 1e-12 to 0.1."""
+    """Scenes of `proximity.testing.scenes.small`; `size` defaults to 1e-12 to 0.1."""
     return _scenes(scenes.small, n, size=_or(size, powers_of_ten(-12, -1)))
 
 
 def offset_scenes(
     offset: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.offset`; `offset` defaults to 1e4 to 1e10."""
+    """Scenes of `proximity.testing.scenes.offset`; `offset` defaults to 1e4 to 1e10."""
     return _scenes(scenes.offset, n, offset=_or(offset, powers_of_ten(4, 10)))
 
 
 def far_points_scenes(
     ratio: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.far_points`; `ratio` defaults to 1e3 to 1e8."""
+    """Scenes of `proximity.testing.scenes.far_points`; `ratio` defaults to 1e3 to 1e8."""
     return _scenes(scenes.far_points, n, ratio=_or(ratio, powers_of_ten(3, 8)))
 
 
 def magnitude_scenes(
     scale: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.magnitude`; `scale` defaults to 1e-300 to 1e300."""
+    """Scenes of `proximity.testing.scenes.magnitude`; `scale` defaults to 1e-300 to 1e300."""
     return _scenes(scenes.magnitude, n, scale=_or(scale, powers_of_ten(-300, 300)))
 
 
 def on_feature_scenes(
     kind: Strategy[str] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.TriangleScene]:
-    """Scenes of `benchmarks.scenes.on_feature`; `kind` defaults to any kind."""
+    """Scenes of `proximity.testing.scenes.on_feature`; `kind` defaults to any kind."""
     kinds = st.sampled_from(["vertex", "edge", "plane"])
     return _scenes(scenes.on_feature, n, kind=_or(kind, kinds))
 
@@ -165,14 +165,14 @@ def triangle_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.TriangleScene]:
 
 
 def disk_well_conditioned_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_well_conditioned`."""
+    """Scenes of `proximity.testing.scenes.disk_well_conditioned`."""
     return _scenes(scenes.disk_well_conditioned, n)
 
 
 def disk_axis_scenes(
     rel_distance: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_axis`; `rel_distance` defaults to 0 or 1e-300 to 1e-8."""
+    """Scenes of `proximity.testing.scenes.disk_axis`; `rel_distance` defaults to 0 or 1e-300 to 1e-8."""
     default = st.one_of(st.just(0.0), powers_of_ten(-300, -8))
     return _scenes(scenes.disk_axis, n, rel_distance=_or(rel_distance, default))
 
@@ -180,24 +180,24 @@ def disk_axis_scenes(
 def disk_rim_scenes(
     rel_distance: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_rim`; `rel_distance` defaults to 1e-13 to 1e-3."""
+    """Scenes of `proximity.testing.scenes.disk_rim`; `rel_distance` defaults to 1e-13 to 1e-3."""
     return _scenes(scenes.disk_rim, n, rel_distance=_or(rel_distance, powers_of_ten(-13, -3)))
 
 
 def disk_in_plane_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_in_plane`."""
+    """Scenes of `proximity.testing.scenes.disk_in_plane`."""
     return _scenes(scenes.disk_in_plane, n)
 
 
 def disk_offset_scenes(
     offset: Strategy[float] | None = None, n: Strategy[int] = SIZES
 ) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_offset`; `offset` defaults to 1e4 to 1e10."""
+    """Scenes of `proximity.testing.scenes.disk_offset`; `offset` defaults to 1e4 to 1e10."""
     return _scenes(scenes.disk_offset, n, offset=_or(offset, powers_of_ten(4, 10)))
 
 
 def disk_unnormalized_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.DiskScene]:
-    """Scenes of `benchmarks.scenes.disk_unnormalized`."""
+    """Scenes of `proximity.testing.scenes.disk_unnormalized`."""
     return _scenes(scenes.disk_unnormalized, n)
 
 

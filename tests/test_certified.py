@@ -5,9 +5,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 import proximity
-from benchmarks import scenes
 from proximity import Circle, Disk, Feature, Triangle
-from tests import exact, strategies
+from proximity.testing import exact, scenes
+from tests import strategies
 
 VOLUME = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

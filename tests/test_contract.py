@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import proximity
-from benchmarks import scenes
 from proximity import Circle, Disk, Feature, Triangle
+from proximity.testing import scenes
 
 TRI = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
 

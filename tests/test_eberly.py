@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from numba import njit
 
-from benchmarks import scenes
 from proximity import Triangle, point_triangle
+from proximity.testing import scenes
 
 
 @njit(error_model="numpy")

@@ -1,4 +1,4 @@
-"""Tests of the exact reference in ``tests/exact.py`` against hand-computed answers.
+"""Tests of the exact reference in ``proximity/testing/exact.py`` against hand-computed answers.
 
 The reference judges the library, so it is checked here on its own: one case
 per Voronoi region with the answer worked out by hand, degenerate triangles,
@@ -17,8 +17,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests import exact
-from tests.exact import Feature
+from proximity.testing import exact
+from proximity.testing.exact import Feature
 
 F = Fraction
 VERTEX0, VERTEX1, VERTEX2, EDGE01, EDGE12, EDGE20, FACE, RIM = Feature

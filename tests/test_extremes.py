@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import proximity
-from tests import exact
+from proximity.testing import exact
 
 HALF_SUBNORMAL = mpmath.mpf(2) ** -1075
 METHODS = ("robust", "certified")

@@ -10,7 +10,7 @@ import proximity
 from benchmarks.meshes import box_points, icosphere, near_points, soup, torus
 from proximity import Feature, TriangleMesh
 from proximity.scene import BRUTE_FORCE_MAX
-from tests import exact
+from proximity.testing import exact
 
 EPS = 2.0**-52
 METHODS = list(TriangleMesh.methods)

@@ -5,7 +5,7 @@ import pytest
 
 import proximity
 from proximity import methods
-from tests import exact
+from proximity.testing import exact
 
 RNG = np.random.default_rng(11)
 VERTICES = RNG.normal(size=(6, 3, 3))

@@ -6,7 +6,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from proximity import Circle, Disk, Feature
-from tests import exact, strategies
+from proximity.testing import exact
+from tests import strategies
 from tests.checks import BOUND, check_round
 
 EPS = 2.0**-52

@@ -1,7 +1,7 @@
 """Stability along every sweep of the benchmark: bounds that hold, failures that are documented.
 
 The benchmark (``python -m benchmarks``) runs every method on the families of
-``benchmarks/scenes.py`` at the parameter values of ``TRIANGLE_FAMILIES`` and
+``proximity/testing/scenes.py`` at the parameter values of ``TRIANGLE_FAMILIES`` and
 ``DISK_FAMILIES``; here the same scenes (the benchmark's seed and batch size)
 assert what its report shows:
 

@@ -8,7 +8,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from proximity import Feature, Triangle
-from tests import exact, strategies
+from proximity.testing import exact
+from tests import strategies
 from tests.checks import BOUND, check_triangle
 
 F = Feature

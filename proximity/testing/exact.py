@@ -25,9 +25,13 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-import mpmath
 import numpy as np
-from mpmath import libmp
+
+try:
+    import mpmath
+    from mpmath import libmp
+except ImportError as error:  # pragma: no cover - the test extra installs it
+    raise ImportError("proximity.testing.exact needs mpmath: pip install 'proximity3d[test]'") from error
 
 __all__ = [
     "EPS",
