@@ -84,7 +84,7 @@ def _provenance(raw):
 
 
 METHOD_NOTES = """\
-* **Errors** are `|d - d*|` against the exact reference (`proximity/testing/exact.py`: rational arithmetic on the
+* **Errors** are `|d - d*|` against the exact reference (`proximity.testing.exact`: rational arithmetic on the
   floats' exact values), in two units: `eps·S`, with `eps = 2^-52` and `S = max_i |P - V_i|` for
   triangles or `|P - C| + R` for disks and circles (`robust` promises at most 8), and ulps of `d*`
   over the queries with `d* > 0`.  Where `d* = 0` (the point is on the shape) an ulp of `d*` would

@@ -47,8 +47,9 @@ import numba
 import numpy as np
 
 import proximity
-from benchmarks import accuracy, scenes
+from benchmarks import accuracy
 from proximity import adapters
+from proximity.testing import scenes
 
 SCHEMA = 1
 

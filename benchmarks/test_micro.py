@@ -21,8 +21,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from benchmarks import accuracy, scenes
+from benchmarks import accuracy
 from proximity import adapters
+from proximity.testing import scenes
 
 BATCH = 100_000
 BACKEND_BATCH = 256

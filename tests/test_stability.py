@@ -25,7 +25,8 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks import accuracy, scenes, suite
+from benchmarks import accuracy, suite
+from proximity.testing import scenes
 
 #: The accuracy batches of the benchmark's default run, query for query.
 N = suite.DEFAULT.n_accuracy
