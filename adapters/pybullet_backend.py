@@ -32,9 +32,8 @@ Circle
     segment in turn and the nearest answer is kept; the capsule radius is
     added back.  A compound of ``K`` capsules would be one body, but
     ``getClosestPoints`` reports at most 16 points per pair of bodies, so a
-    compound of more children can miss its nearest one; creating a body
-    also costs about 0.3 ms per capsule, where moving one costs a few
-    microseconds.
+    compound of more children can miss its nearest one; and creating a
+    body costs far more than moving one.
 TriangleMesh
     ``GEOM_MESH`` with ``GEOM_FORCE_CONCAVE_TRIMESH`` (a static concave
     mesh, not its convex hull), in the frame of its bounding box's center.

@@ -55,9 +55,8 @@ def median_times(fns, repeats=REPEATS, rounds=ROUNDS):
     timed calls back to back, so that each is timed in the steady state of
     repeating itself, as a program calling it in a loop would see it.
     Alternating single calls of different functions would time each one
-    right after the other's large temporaries were freed, and fresh pages are
-    slow on this project's machine: a circle's distances took 15 ms instead
-    of 7 ms straight after the NumPy formula.  The rounds spread each
+    right after the other's large temporaries were freed, on fresh pages,
+    which are slow to write (see ``docs/performance.md``).  The rounds spread each
     function's calls over the whole measurement, so that a slow phase of the
     shared machine, which lasts seconds, slows both sides of a ratio rather
     than only the side timed during it.
@@ -164,29 +163,40 @@ def loop_row(n, repeats):
 
     shape = proximity.Triangle(vertices)
 
-    def with_proximity():
+    def method_form():
         for p in points:
             shape.closest_point(p)
 
+    def function_form():
+        closest_point = proximity.closest_point
+        for p in points:
+            closest_point(shape, p)
+
     # Calls this short are at the mercy of a busy moment on a shared machine,
-    # so the two loops take turns, each timed many times.  (Unlike the batch
-    # rows, neither leaves large temporaries behind to slow the other.)
-    theirs, ours = [], []
-    with_fcl(), with_proximity()
+    # so the loops take turns, each timed many times.  (Unlike the batch
+    # rows, none leaves large temporaries behind to slow the others.)
+    loops = {"fcl": with_fcl, "method": method_form, "function": function_form}
+    times = {name: [] for name in loops}
+    for fn in loops.values():
+        fn()
     for _ in range(3 * repeats):
-        for fn, times in ((with_fcl, theirs), (with_proximity, ours)):
+        for name, fn in loops.items():
             start = time.perf_counter()
             fn()
-            times.append(time.perf_counter() - start)
-    theirs, ours = float(np.median(theirs)), float(np.median(ours))
+            times[name].append(time.perf_counter() - start)
+    median = {name: float(np.median(t)) for name, t in times.items()}
     return [
         _row(
-            "one point, one prebuilt triangle, Python loop: closest_point vs fcl.distance",
-            ours,
-            theirs,
+            f"one point, one prebuilt triangle, Python loop: {label} vs fcl.distance",
+            median[name],
+            median["fcl"],
             n,
             1.5,
             unit="calls/s",
+        )
+        for name, label in (
+            ("method", "tri.closest_point(p)"),
+            ("function", "proximity.closest_point(tri, p)"),
         )
     ]
 
@@ -305,7 +315,7 @@ def startup_rows(repeats, package_python=None):
     start-up for comparison.
 
     ``package_python`` is an interpreter whose environment holds the package
-    and its dependencies alone (NumPy, Numba), as ``pip install proximity``
+    and its dependencies alone (NumPy, Numba), as ``pip install proximity3d``
     gives them, with this environment's Numba; ``make bench`` makes one.
     The limits apply to its rows.
     Where this environment also holds scipy, as the benchmark's does for

@@ -2,9 +2,8 @@
 
 A batch of a million closest points writes 65 MB of results.  Memory that the
 process has just been given by the operating system is slow to write the
-first time (every page is faulted in and cleared): on this project's machine
-that took as long as the queries themselves, and varied by a factor of five
-from call to call.  A program that queries batches in a loop and drops each
+first time (every page is faulted in and cleared), which can take as long as
+the queries themselves (``docs/performance.md``).  A program that queries batches in a loop and drops each
 result before the next (a simulation step, a sweep) can instead reuse the
 memory of the result it dropped, which is what this module arranges.
 

@@ -403,9 +403,8 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     classified by a loop that compiles to SIMD code.  The formula for the
     squared distance differs by feature (vertex, edge or face) and each is
     costly in double-double, so the queries are then sorted by kind, and
-    each kind computed by its own SIMD loop: single-threaded on the speed
-    benchmark's pairs, a loop computing all three formulas for every query
-    took 1.2 (distances) to 1.35 (closest points) times as long.  Queries
+    each kind computed by its own SIMD loop rather than all three formulas
+    for every query (``docs/performance.md``).  Queries
     that the filter could not certify (outside the safe window, or
     undecided) are redone one by one by :func:`triangle`; ``exact`` flags
     the rows that even it left to the exact fallback.

@@ -221,9 +221,9 @@ def eberly_select(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
     :class:`~proximity.Feature` value).
 
     The choice is written as nested selects, each on one comparison, as the
-    listings' nested ifs: combining the comparisons into region masks with
-    ``&`` and ``|`` compiled to a loop in which about one instruction in
-    four packed 64-bit comparison masks into 32-bit lanes or back.
+    listings' nested ifs: region masks combined with ``&`` and ``|`` compile
+    to a loop that spends much of its time converting comparison masks
+    (``docs/performance.md``).
 
     It is :func:`eberly_terms` followed by :func:`eberly_choice`, which the
     loop over many triangles runs as separate passes.
@@ -593,9 +593,9 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
 
     The query runs in three passes over the block: the coefficients (rows
     12-16), the choice of ``s, t`` and the feature (rows 17-19), and the
-    result row.  As one pass, the loop kept more values live than there are
-    registers, and about one instruction in four moved them to the stack
-    and back; the passes do the same operations a tenth to a fifth faster.
+    result row.  As one pass, the loop keeps more values live than there are
+    registers; the passes do the same operations with fewer moves to the
+    stack (``docs/performance.md``).
     """
     z = np.empty((22, BLOCK))
     gather_triangles(z, V, P, n_j, k0, nb)
