@@ -169,7 +169,7 @@ def _interval(kinds, q, k, px, py, pz):
         )[1]
         m = max(max(abs(q[k, 0] - px), abs(q[k, 1] - py)), abs(q[k, 2] - pz))
         scale = 1.75 * m + q[k, 9]
-    w = 16.0 * EPS * scale
+    w = 16.0 * EPS * scale + 5e-324  # the bound's absolute term, for subnormal distances
     return d - w, d + w
 
 

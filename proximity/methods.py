@@ -52,7 +52,7 @@ class Method:
 
 ROBUST = Method(
     "robust",
-    "|d - d*| <= 8 eps S for every finite input (S: the query's size)",
+    "|d - d*| <= 8 eps S + 2^-1075 for every finite input (S: the query's size)",
 )
 CERTIFIED = Method(
     "certified",

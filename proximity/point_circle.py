@@ -27,7 +27,8 @@ Two methods:
     size lies outside ``[2^-64, 2^64]`` are scaled by a power of two first,
     so ``h^2`` and ``(q - R)^2`` neither overflow nor underflow.  Normals of
     any length are normalised once, at construction, the same way.  The
-    result satisfies ``|d - d*| <= 8 eps (|P - C| + R)``.
+    result satisfies ``|d - d*| <= 8 eps (|P - C| + R) + 2^-1075``; the
+    absolute term is the rounding of a subnormal distance.
 """
 
 import math

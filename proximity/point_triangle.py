@@ -42,9 +42,11 @@ Two methods:
       or with coincident vertices) is handled as the segments or the point
       it is, with no special case.
 
-    The result satisfies ``|d - d*| <= 8 eps S`` with ``S = max_i |P - V_i|``
-    for every finite input; ``tests/`` checks this against exact rational
-    arithmetic on adversarial families.
+    The result satisfies ``|d - d*| <= 8 eps S + 2^-1075`` with
+    ``S = max_i |P - V_i|`` for every finite input (the absolute term is the
+    rounding of a subnormal distance); ``tests/`` checks this against exact
+    rational arithmetic on adversarial families and at both ends of the
+    float range.
 
 Both methods are dimension-free in the document; here 2D triangles are
 embedded in the ``z = 0`` plane, which changes no distance.

@@ -402,7 +402,7 @@ class Circle(_Round):
     Notes
     -----
     Method ``robust`` (default) decomposes ``P - C`` into height and radial
-    terms and is accurate to ``8 eps (|P - C| + R)``; ``eberly`` is the
+    terms and is accurate to ``8 eps (|P - C| + R) + 2^-1075``; ``eberly`` is the
     formula of Eberly's *Distance Between Point and Circle or Disk in 3D*
     as written, kept as a baseline.
 
