@@ -47,11 +47,17 @@ def frozen_float64(value, name, expected):
 def require_finite(array, name):
     """Raise a ValueError naming the first non-finite entry of ``array``.
 
-    The minimum and maximum are finite exactly when every entry is (NaN
-    propagates through both), which checks a large array without a
-    temporary array of its size.
+    A finite sum means every entry is finite (NaN and inf propagate), which
+    checks a large array in one pass without a temporary array of its size;
+    only a sum that is not finite (a non-finite entry, or an overflow) is
+    looked at entry by entry.
     """
-    if array.size == 0 or (np.isfinite(array.min()) and np.isfinite(array.max())):
+    if array.size == 0:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        if np.isfinite(np.add.reduce(array, axis=None)):
+            return
+    if np.isfinite(array.min()) and np.isfinite(array.max()):
         return
     index = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
     raise ValueError(f"{name} must be finite; got {array[index]} at index {index}")

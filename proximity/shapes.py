@@ -267,6 +267,9 @@ class Triangle(_Facade):
         The vertices ``V0, V1, V2`` of each triangle, finite, with D = 2 or 3.
         Degenerate triangles (collinear or coincident vertices) are valid:
         the ``robust`` method answers for the segment or point they are.
+        The triangle keeps its own read-only copy, so that it cannot change
+        behind its back; a C-contiguous float64 array that is read-only
+        already is used as it is, without a copy.
 
     Examples
     --------
