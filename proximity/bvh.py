@@ -280,6 +280,10 @@ def _nearest(
     for block in prange((n + BLOCK - 1) // BLOCK):
         stack_node = np.empty(depth + 1, np.int64)
         stack_sqr = np.empty(depth + 1)
+        # The previous point's nearest primitive, tried first: points are
+        # visited in spatial order, so it is close to the next point's, and
+        # the bound it gives prunes from the root down.
+        prev_k = -1
         for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
             i = order[j]
             px, py, pz = points[i, 0], points[i, 1], points[i, 2]
@@ -299,10 +303,13 @@ def _nearest(
                 limit = math.inf  # its square, for the boxes
                 node = 0
                 sp = 0
+                seed = prev_k
                 while True:
-                    c = count[node]
+                    if seed >= 0:
+                        first, c = seed, 1
+                    else:
+                        first, c = child[node], count[node]
                     if c > 0:
-                        first = child[node]
                         for k in range(first, first + c):
                             if _culled(cull, k, s, qx, qy, qz, reach):
                                 continue
@@ -327,7 +334,8 @@ def _nearest(
                                     w_flag = r[10]
                             reach = min(best, upper) * s + SLACK
                             limit = reach * reach
-                        node = -1
+                        node = 0 if seed >= 0 else -1  # after the seed, the tree from its root
+                        seed = -1
                     else:
                         left = child[node]
                         right = left + 1
@@ -351,6 +359,7 @@ def _nearest(
                                 break
                         if node < 0:
                             break
+            prev_k = best_k
             # An undecided answer could be the least (or tie with it): resolve
             # every candidate up to the bound exactly, outside the kernel.
             undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
@@ -445,132 +454,177 @@ def _morton(points):
     return codes
 
 
-@kernel()
-def _build(lo, hi, leaf_size):
-    """Topology of a hierarchy over boxes ``lo``, ``hi`` (n, 3), n >= 1.
+@inline
+def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax):
+    """Split node ``i`` (primitives ``child[i] .. + count[i]``, centroid bounds
+    ``cmin[i]``, ``cmax[i]``) at its best binned SAH plane, into nodes
+    ``first_child`` and ``first_child + 1``.
+
+    The rows of ``cen``, ``lo``, ``hi`` and ``order`` are partitioned in place
+    (each node's rows are contiguous), and the children's centroid bounds are
+    gathered on the way.
+    """
+    start = child[i]
+    cnt = count[i]
+    end = start + cnt
+    bin_count = np.zeros((3, BINS), np.int64)
+    bin_lo = np.full((3, BINS, 3), math.inf)
+    bin_hi = np.full((3, BINS, 3), -math.inf)
+    scale = np.zeros(3)
+    for a in range(3):
+        extent = cmax[i, a] - cmin[i, a]
+        if extent > 0.0 and extent < math.inf:
+            scale[a] = BINS / extent
+    # One pass bins the centroids along all three axes.
+    for j in range(start, end):
+        for a in range(3):
+            if scale[a] == 0.0:
+                continue
+            b = min(int((cen[j, a] - cmin[i, a]) * scale[a]), BINS - 1)
+            bin_count[a, b] += 1
+            for c in range(3):
+                bin_lo[a, b, c] = min(bin_lo[a, b, c], lo[j, c])
+                bin_hi[a, b, c] = max(bin_hi[a, b, c], hi[j, c])
+    right_area = np.empty(BINS)
+    right_count = np.empty(BINS, np.int64)
+    best_cost = math.inf
+    best_axis = -1
+    best_bin = 0
+    for a in range(3):
+        if scale[a] == 0.0:
+            continue
+        # Sweep from the right, then from the left, costing each plane
+        # between bins b and b + 1 as area x count on either side.
+        xl, yl, zl = math.inf, math.inf, math.inf
+        xh, yh, zh = -math.inf, -math.inf, -math.inf
+        total = 0
+        for b in range(BINS - 1, 0, -1):
+            total += bin_count[a, b]
+            xl, yl, zl = min(xl, bin_lo[a, b, 0]), min(yl, bin_lo[a, b, 1]), min(zl, bin_lo[a, b, 2])
+            xh, yh, zh = max(xh, bin_hi[a, b, 0]), max(yh, bin_hi[a, b, 1]), max(zh, bin_hi[a, b, 2])
+            right_count[b] = total
+            dx, dy, dz = xh - xl, yh - yl, zh - zl
+            right_area[b] = dx * dy + dy * dz + dz * dx if total > 0 else 0.0
+        xl, yl, zl = math.inf, math.inf, math.inf
+        xh, yh, zh = -math.inf, -math.inf, -math.inf
+        total = 0
+        for b in range(BINS - 1):
+            total += bin_count[a, b]
+            xl, yl, zl = min(xl, bin_lo[a, b, 0]), min(yl, bin_lo[a, b, 1]), min(zl, bin_lo[a, b, 2])
+            xh, yh, zh = max(xh, bin_hi[a, b, 0]), max(yh, bin_hi[a, b, 1]), max(zh, bin_hi[a, b, 2])
+            if total == 0 or right_count[b + 1] == 0:
+                continue
+            dx, dy, dz = xh - xl, yh - yl, zh - zl
+            cost = (dx * dy + dy * dz + dz * dx) * total + right_area[b + 1] * right_count[b + 1]
+            if cost < best_cost:
+                best_cost = cost
+                best_axis = a
+                best_bin = b
+    left = first_child
+    right = first_child + 1
+    for a in range(3):
+        cmin[left, a] = math.inf
+        cmax[left, a] = -math.inf
+        cmin[right, a] = math.inf
+        cmax[right, a] = -math.inf
+    if best_axis < 0:
+        # Coincident centroids (or costs beyond the float range): halves by index.
+        mid = start + cnt // 2
+        for j in range(start, end):
+            side = left if j < mid else right
+            for a in range(3):
+                cmin[side, a] = min(cmin[side, a], cen[j, a])
+                cmax[side, a] = max(cmax[side, a], cen[j, a])
+    else:
+        a = best_axis
+        lo_j = start
+        hi_j = end - 1
+        while lo_j <= hi_j:
+            b = min(int((cen[lo_j, a] - cmin[i, a]) * scale[a]), BINS - 1)
+            side = left if b <= best_bin else right
+            for c in range(3):
+                cmin[side, c] = min(cmin[side, c], cen[lo_j, c])
+                cmax[side, c] = max(cmax[side, c], cen[lo_j, c])
+            if b <= best_bin:
+                lo_j += 1
+            else:
+                # Swap rows lo_j and hi_j of every array kept in node order.
+                order[lo_j], order[hi_j] = order[hi_j], order[lo_j]
+                for c in range(3):
+                    cen[lo_j, c], cen[hi_j, c] = cen[hi_j, c], cen[lo_j, c]
+                    lo[lo_j, c], lo[hi_j, c] = lo[hi_j, c], lo[lo_j, c]
+                    hi[lo_j, c], hi[hi_j, c] = hi[hi_j, c], hi[lo_j, c]
+                hi_j -= 1
+        mid = lo_j
+    child[left] = start
+    count[left] = mid - start
+    child[right] = mid
+    count[right] = end - mid
+    child[i] = left
+    count[i] = 0
+
+
+@kernel(parallel=True)
+def _build(boxes_lo, boxes_hi, leaf_size):
+    """Topology of a hierarchy over boxes ``boxes_lo``, ``boxes_hi`` (n, 3), n >= 1.
 
     Returns ``(nodes, order, depth)``: ``nodes[i] = (child, count)`` as in
     :func:`_nearest`, ``order[j]`` the primitive stored at position ``j``,
     and the largest depth of a leaf.
+
+    Binned SAH, one level of the tree at a time: the nodes of a level are
+    split in parallel, each on its own contiguous rows, and the children of
+    a level's nodes are numbered in order after it (breadth first, so that a
+    node's children are adjacent and come after it).
     """
-    n = lo.shape[0]
+    n = boxes_lo.shape[0]
     cap = 2 * n - 1
     child = np.zeros(cap, np.int64)
     count = np.zeros(cap, np.int64)
-    level = np.zeros(cap, np.int64)
+    first_child = np.zeros(cap, np.int64)
+    cmin = np.empty((cap, 3))
+    cmax = np.empty((cap, 3))
     order = np.arange(n)
+    # Rows in node order, moved along with ``order`` as nodes are split.
+    lo = np.empty((n, 3))
+    hi = np.empty((n, 3))
     cen = np.empty((n, 3))
+    for j in prange(n):
+        for a in range(3):
+            lo[j, a] = boxes_lo[j, a]
+            hi[j, a] = boxes_hi[j, a]
+            # Halves first: the sum of two coordinates near 1e308 would overflow.
+            cen[j, a] = boxes_lo[j, a] * 0.5 + boxes_hi[j, a] * 0.5
+    for a in range(3):
+        cmin[0, a] = math.inf
+        cmax[0, a] = -math.inf
     for j in range(n):
         for a in range(3):
-            # Halves first: the sum of two coordinates near 1e308 would overflow.
-            cen[j, a] = lo[j, a] * 0.5 + hi[j, a] * 0.5
-    bin_count = np.empty(BINS, np.int64)
-    bin_lo = np.empty((BINS, 3))
-    bin_hi = np.empty((BINS, 3))
-    right_area = np.empty(BINS)
-    right_count = np.empty(BINS, np.int64)
-    child[0] = 0
+            cmin[0, a] = min(cmin[0, a], cen[j, a])
+            cmax[0, a] = max(cmax[0, a], cen[j, a])
     count[0] = n
     n_nodes = 1
-    depth = 0
-    i = 0
-    # Breadth first: a node's children get the next two free indices, so
-    # every node is processed after its parent by a plain loop.
-    while i < n_nodes:
-        start = child[i]
-        cnt = count[i]
-        depth = max(depth, level[i])
-        if cnt <= leaf_size:
-            i += 1
-            continue
-        end = start + cnt
-        cmin = np.full(3, math.inf)
-        cmax = np.full(3, -math.inf)
-        for j in range(start, end):
-            p = order[j]
-            for a in range(3):
-                cmin[a] = min(cmin[a], cen[p, a])
-                cmax[a] = max(cmax[a], cen[p, a])
-        best_cost = math.inf
-        best_axis = -1
-        best_bin = 0
-        for a in range(3):
-            extent = cmax[a] - cmin[a]
-            if not (extent > 0.0 and extent < math.inf):
-                continue
-            scale = BINS / extent
-            bin_count[:] = 0
-            bin_lo[:] = math.inf
-            bin_hi[:] = -math.inf
-            for j in range(start, end):
-                p = order[j]
-                b = min(int((cen[p, a] - cmin[a]) * scale), BINS - 1)
-                bin_count[b] += 1
-                for c in range(3):
-                    bin_lo[b, c] = min(bin_lo[b, c], lo[p, c])
-                    bin_hi[b, c] = max(bin_hi[b, c], hi[p, c])
-            # Sweep from the right, then from the left, costing each plane
-            # between bins b and b + 1 as area x count on either side.
-            xl, yl, zl = math.inf, math.inf, math.inf
-            xh, yh, zh = -math.inf, -math.inf, -math.inf
-            total = 0
-            for b in range(BINS - 1, 0, -1):
-                total += bin_count[b]
-                xl, yl, zl = min(xl, bin_lo[b, 0]), min(yl, bin_lo[b, 1]), min(zl, bin_lo[b, 2])
-                xh, yh, zh = max(xh, bin_hi[b, 0]), max(yh, bin_hi[b, 1]), max(zh, bin_hi[b, 2])
-                right_count[b] = total
-                dx, dy, dz = xh - xl, yh - yl, zh - zl
-                right_area[b] = dx * dy + dy * dz + dz * dx if total > 0 else 0.0
-            xl, yl, zl = math.inf, math.inf, math.inf
-            xh, yh, zh = -math.inf, -math.inf, -math.inf
-            total = 0
-            for b in range(BINS - 1):
-                total += bin_count[b]
-                xl, yl, zl = min(xl, bin_lo[b, 0]), min(yl, bin_lo[b, 1]), min(zl, bin_lo[b, 2])
-                xh, yh, zh = max(xh, bin_hi[b, 0]), max(yh, bin_hi[b, 1]), max(zh, bin_hi[b, 2])
-                if total == 0 or right_count[b + 1] == 0:
-                    continue
-                dx, dy, dz = xh - xl, yh - yl, zh - zl
-                cost = (dx * dy + dy * dz + dz * dx) * total + right_area[b + 1] * right_count[b + 1]
-                if cost < best_cost:
-                    best_cost = cost
-                    best_axis = a
-                    best_bin = b
-        if best_axis < 0:
-            # Coincident centroids (or costs beyond the float range): halves by index.
-            mid = start + cnt // 2
-        else:
-            scale = BINS / (cmax[best_axis] - cmin[best_axis])
-            lo_j = start
-            hi_j = end - 1
-            while lo_j <= hi_j:
-                p = order[lo_j]
-                b = min(int((cen[p, best_axis] - cmin[best_axis]) * scale), BINS - 1)
-                if b <= best_bin:
-                    lo_j += 1
-                else:
-                    order[lo_j] = order[hi_j]
-                    order[hi_j] = p
-                    hi_j -= 1
-            mid = lo_j
-        left = n_nodes
-        child[left] = start
-        count[left] = mid - start
-        child[left + 1] = mid
-        count[left + 1] = end - mid
-        level[left] = level[i] + 1
-        level[left + 1] = level[i] + 1
-        child[i] = left
-        count[i] = 0
-        n_nodes += 2
-        i += 1
+    begin = 0
+    depth = -1
+    while begin < n_nodes:
+        end_level = n_nodes
+        depth += 1
+        for i in range(begin, end_level):
+            if count[i] > leaf_size:
+                first_child[i] = n_nodes
+                n_nodes += 2
+        for i in prange(begin, end_level):
+            if count[i] > leaf_size:
+                _split(i, first_child[i], child, count, cen, lo, hi, order, cmin, cmax)
+        begin = end_level
     nodes = np.empty((n_nodes, 2), np.int64)
-    nodes[:, 0] = child[:n_nodes]
-    nodes[:, 1] = count[:n_nodes]
+    for i in range(n_nodes):
+        nodes[i, 0] = child[i]
+        nodes[i, 1] = count[i]
     return nodes, order, depth
 
 
-@kernel()
+@kernel(parallel=True)
 def _refit(child, count, kinds, params, cull):
     """Node boxes and slabs ``(lo, hi, u, h_min, h_max)``, ``(m, 11)``, over the stored primitives.
 
@@ -604,7 +658,7 @@ def _refit(child, count, kinds, params, cull):
                 for a in range(3):
                     bounds[i, a] = min(bounds[i, a], bounds[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
-    for i in range(m):
+    for i in prange(m):
         ux, uy, uz = 0.0, 0.0, 0.0
         for k in range(start[i], end[i]):
             ux += cull[k, 6]
@@ -715,6 +769,33 @@ def _slab(u, points):
     return np.where(ok, h.min(axis=1), -np.inf), np.where(ok, h.max(axis=1), np.inf)
 
 
+@kernel(parallel=True)
+def _triangle_cull(params, rows, cull):
+    """:func:`primitive_cull` for the triangles at ``rows``: their box, and
+    the slab of their normal shortened as :func:`_shorter_than_one` does."""
+    for m in prange(rows.shape[0]):
+        k = rows[m]
+        for a in range(3):
+            cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
+            cull[k, 3 + a] = max(max(params[k, a], params[k, 3 + a]), params[k, 6 + a])
+        ex, ey, ez = params[k, 3] - params[k, 0], params[k, 4] - params[k, 1], params[k, 5] - params[k, 2]
+        fx, fy, fz = params[k, 6] - params[k, 0], params[k, 7] - params[k, 1], params[k, 8] - params[k, 2]
+        nx, ny, nz = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
+        length = math.sqrt(nx * nx + ny * ny + nz * nz)
+        shrink = (1.0 - 2.0**-40) / length if length > 0.0 else 0.0
+        ux, uy, uz = nx * shrink, ny * shrink, nz * shrink
+        if not (math.isfinite(ux) and math.isfinite(uy) and math.isfinite(uz)):
+            ux, uy, uz = 0.0, 0.0, 0.0
+        low, high = math.inf, -math.inf
+        for v in range(3):
+            h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
+            low, high = min(low, h), max(high, h)
+        if not (math.isfinite(low) and math.isfinite(high)):
+            low, high = -math.inf, math.inf
+        cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
+        cull[k, 9], cull[k, 10] = low, high
+
+
 def primitive_cull(kinds, params):
     """Box and slab of each primitive, ``(n, 11)``, and the loose ones for ``eberly``.
 
@@ -729,14 +810,7 @@ def primitive_cull(kinds, params):
     n = len(kinds)
     cull = np.empty((n, 11))
     tri = kinds == TRIANGLE
-    v = params[tri, :9].reshape(-1, 3, 3)
-    cull[tri, 0:3] = v.min(axis=1)
-    cull[tri, 3:6] = v.max(axis=1)
-    with np.errstate(invalid="ignore", over="ignore"):
-        normal = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    u = _shorter_than_one(normal)
-    cull[tri, 6:9] = u
-    cull[tri, 9], cull[tri, 10] = _slab(u, v)
+    _triangle_cull(params, np.flatnonzero(tri), cull)
     round_ = ~tri
     loose = cull
     if round_.any():
@@ -791,6 +865,19 @@ def _tree(kinds, params, order, child, count, depth, cull, index=None):
     )
 
 
+@kernel(parallel=True)
+def _row_hashes(kinds, bits):
+    """A 64-bit hash of each primitive's kind and parameter bits (FNV-style mixing)."""
+    n = bits.shape[0]
+    h = np.empty(n, np.uint64)
+    for k in prange(n):
+        x = np.uint64(kinds[k])
+        for c in range(bits.shape[1]):
+            x = (x ^ bits[k, c]) * np.uint64(0x100000001B3)
+        h[k] = x
+    return h
+
+
 def distinct(kinds, params):
     """Which primitives to store: all but exact copies (the same kind and the
     same bits) of a primitive with a lower index.
@@ -801,10 +888,8 @@ def distinct(kinds, params):
     visit them all for every point).
     """
     n = len(kinds)
-    bits = np.concatenate([kinds.astype(np.uint64)[:, None], params.view(np.uint64)], axis=1)
-    h = np.zeros(n, np.uint64)
-    for column in bits.T:
-        h = (h ^ column) * np.uint64(0x100000001B3)  # FNV-style mixing of the row's bits
+    bits = params.view(np.uint64)
+    h = _row_hashes(kinds, bits)
     order = np.argsort(h, kind="stable")
     sorted_h = h[order]
     starts = np.concatenate([[True], sorted_h[1:] != sorted_h[:-1]])
@@ -815,7 +900,8 @@ def distinct(kinds, params):
     if len(later):
         first = order[np.maximum.accumulate(np.where(starts, np.arange(n), 0))[later]]
         rows = order[later]
-        keep[rows[(bits[rows] == bits[first]).all(axis=1)]] = False
+        same = (bits[rows] == bits[first]).all(axis=1) & (kinds[rows] == kinds[first])
+        keep[rows[same]] = False
     return keep
 
 
