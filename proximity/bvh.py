@@ -624,7 +624,7 @@ def _build(boxes_lo, boxes_hi, leaf_size):
     return nodes, order, depth
 
 
-@kernel(parallel=True)
+@kernel()
 def _refit(child, count, kinds, params, cull):
     """Node boxes and slabs ``(lo, hi, u, h_min, h_max)``, ``(m, 11)``, over the stored primitives.
 
@@ -658,7 +658,7 @@ def _refit(child, count, kinds, params, cull):
                 for a in range(3):
                     bounds[i, a] = min(bounds[i, a], bounds[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
-    for i in prange(m):
+    for i in range(m):
         ux, uy, uz = 0.0, 0.0, 0.0
         for k in range(start[i], end[i]):
             ux += cull[k, 6]
@@ -769,11 +769,11 @@ def _slab(u, points):
     return np.where(ok, h.min(axis=1), -np.inf), np.where(ok, h.max(axis=1), np.inf)
 
 
-@kernel(parallel=True)
+@kernel()
 def _triangle_cull(params, rows, cull):
     """:func:`primitive_cull` for the triangles at ``rows``: their box, and
     the slab of their normal shortened as :func:`_shorter_than_one` does."""
-    for m in prange(rows.shape[0]):
+    for m in range(rows.shape[0]):
         k = rows[m]
         for a in range(3):
             cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
@@ -865,12 +865,12 @@ def _tree(kinds, params, order, child, count, depth, cull, index=None):
     )
 
 
-@kernel(parallel=True)
+@kernel()
 def _row_hashes(kinds, bits):
     """A 64-bit hash of each primitive's kind and parameter bits (FNV-style mixing)."""
     n = bits.shape[0]
     h = np.empty(n, np.uint64)
-    for k in prange(n):
+    for k in range(n):
         x = np.uint64(kinds[k])
         for c in range(bits.shape[1]):
             x = (x ^ bits[k, c]) * np.uint64(0x100000001B3)

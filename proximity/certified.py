@@ -483,7 +483,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
             store(z, 12, q, res[1:])
         else:
             nan = math.nan
-            store(z, 12, q, (nan, nan, nan, nan, nan, NONE, nan, nan, nan))
+            store(z, 12, q, (nan, nan, nan, nan, nan, float(NONE), nan, nan, nan))
     scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
 
 
@@ -518,10 +518,13 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
         g = (1.0 / f1) * (1.0 / f2)
         if not g < np.inf:
             return fail
-    feature = _classify_local(a, b, c, e0, e1, e2)
-    kind = _kind(feature)
+    code = _classify_local(a, b, c, e0, e1, e2)
+    kind = _kind(code)
     if kind == 3:
         return fail
+    # The feature as a float, as the block loops keep it: the helpers then
+    # compile once for both.
+    feature = float(code)
     if kind == 0:
         part = _vertex(a, b, c, feature)
     elif kind == 1:
