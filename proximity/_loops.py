@@ -111,6 +111,46 @@ def single_shape(view):
 # assignments and per-element wrap-around tests cost more than the queries.
 BLOCK = 128
 
+# The rows of a block's scratch, by name.  Each query is one column.
+#: Pairs of triangles and points: the vertices V0, V1, V2 (nine rows) and
+#: the point (three), then the query's nine results, then a flag.
+PAIR_V, PAIR_P, PAIR_OUT, PAIR_OK, PAIR_ROWS = 0, 9, 12, 21, 22
+#: Many points against one shape, read as scalars: the point, the nine
+#: results, a flag.
+ONE_P, ONE_OUT, ONE_OK, ONE_ROWS = 0, 3, 12, 13
+#: Disks and circles: center, unit normal, point, radius, the nine results,
+#: a flag.
+ROUND_C, ROUND_U, ROUND_P, ROUND_R, ROUND_OUT, ROUND_OK, ROUND_ROWS = 0, 3, 6, 9, 10, 19, 20
+
+
+@inline
+def triangle_at(z, q):
+    """Query ``q`` of a block of pairs: ``(v0x, v0y, v0z, v1x, ..., v2z, px, py, pz)``."""
+    return (
+        z[PAIR_V, q], z[PAIR_V + 1, q], z[PAIR_V + 2, q],
+        z[PAIR_V + 3, q], z[PAIR_V + 4, q], z[PAIR_V + 5, q],
+        z[PAIR_V + 6, q], z[PAIR_V + 7, q], z[PAIR_V + 8, q],
+        z[PAIR_P, q], z[PAIR_P + 1, q], z[PAIR_P + 2, q],
+    )  # fmt: skip
+
+
+@inline
+def point_at(z, first, q):
+    """The point of query ``q`` from rows ``first .. first + 2``."""
+    return z[first, q], z[first + 1, q], z[first + 2, q]
+
+
+@inline
+def round_at(z, q):
+    """Query ``q`` of a block of disks or circles, in the order of the
+    queries' arguments: ``(cx, cy, cz, ux, uy, uz, radius, px, py, pz)``."""
+    return (
+        z[ROUND_C, q], z[ROUND_C + 1, q], z[ROUND_C + 2, q],
+        z[ROUND_U, q], z[ROUND_U + 1, q], z[ROUND_U + 2, q],
+        z[ROUND_R, q],
+        z[ROUND_P, q], z[ROUND_P + 1, q], z[ROUND_P + 2, q],
+    )  # fmt: skip
+
 
 @inline
 def _zero_tail(z, first, last, nb):
@@ -122,8 +162,9 @@ def _zero_tail(z, first, last, nb):
 
 @inline
 def gather_triangles(z, V, P, n_j, k0, nb):
-    """Rows 0-11 of ``z``: the vertices ``V0, V1, V2`` and the point of
-    queries ``k0 .. k0 + nb`` of an ``(I, J)`` loop, one query per column."""
+    """Rows :data:`PAIR_V` to :data:`PAIR_P` + 2 of ``z``: the vertices
+    ``V0, V1, V2`` and the point of queries ``k0 .. k0 + nb`` of an
+    ``(I, J)`` loop, one query per column."""
     i = k0 // n_j
     j = k0 - i * n_j
     q = 0
@@ -132,22 +173,22 @@ def gather_triangles(z, V, P, n_j, k0, nb):
         Vi = V[i]
         Pi = P[i]
         for t in range(run):
-            z[0, q + t] = Vi[j + t, 0, 0]
-            z[1, q + t] = Vi[j + t, 0, 1]
-            z[2, q + t] = Vi[j + t, 0, 2]
-            z[3, q + t] = Vi[j + t, 1, 0]
-            z[4, q + t] = Vi[j + t, 1, 1]
-            z[5, q + t] = Vi[j + t, 1, 2]
-            z[6, q + t] = Vi[j + t, 2, 0]
-            z[7, q + t] = Vi[j + t, 2, 1]
-            z[8, q + t] = Vi[j + t, 2, 2]
-            z[9, q + t] = Pi[j + t, 0]
-            z[10, q + t] = Pi[j + t, 1]
-            z[11, q + t] = Pi[j + t, 2]
+            z[PAIR_V, q + t] = Vi[j + t, 0, 0]
+            z[PAIR_V + 1, q + t] = Vi[j + t, 0, 1]
+            z[PAIR_V + 2, q + t] = Vi[j + t, 0, 2]
+            z[PAIR_V + 3, q + t] = Vi[j + t, 1, 0]
+            z[PAIR_V + 4, q + t] = Vi[j + t, 1, 1]
+            z[PAIR_V + 5, q + t] = Vi[j + t, 1, 2]
+            z[PAIR_V + 6, q + t] = Vi[j + t, 2, 0]
+            z[PAIR_V + 7, q + t] = Vi[j + t, 2, 1]
+            z[PAIR_V + 8, q + t] = Vi[j + t, 2, 2]
+            z[PAIR_P, q + t] = Pi[j + t, 0]
+            z[PAIR_P + 1, q + t] = Pi[j + t, 1]
+            z[PAIR_P + 2, q + t] = Pi[j + t, 2]
         q += run
         i += 1
         j = 0
-    _zero_tail(z, 0, 12, nb)
+    _zero_tail(z, PAIR_V, PAIR_P + 3, nb)
 
 
 @inline
@@ -172,8 +213,9 @@ def gather_points(z, first, P, n_j, k0, nb):
 
 @inline
 def gather_round(z, C, U, P, R, n_j, k0, nb):
-    """Rows 0-9 of ``z``: center, unit normal, point and radius of queries
-    ``k0 .. k0 + nb``, as :func:`gather_triangles`."""
+    """Rows :data:`ROUND_C` to :data:`ROUND_R` of ``z``: center, unit
+    normal, point and radius of queries ``k0 .. k0 + nb``, as
+    :func:`gather_triangles`."""
     i = k0 // n_j
     j = k0 - i * n_j
     q = 0
@@ -184,20 +226,20 @@ def gather_round(z, C, U, P, R, n_j, k0, nb):
         Pi = P[i]
         Ri = R[i]
         for t in range(run):
-            z[0, q + t] = Ci[j + t, 0]
-            z[1, q + t] = Ci[j + t, 1]
-            z[2, q + t] = Ci[j + t, 2]
-            z[3, q + t] = Ui[j + t, 0]
-            z[4, q + t] = Ui[j + t, 1]
-            z[5, q + t] = Ui[j + t, 2]
-            z[6, q + t] = Pi[j + t, 0]
-            z[7, q + t] = Pi[j + t, 1]
-            z[8, q + t] = Pi[j + t, 2]
-            z[9, q + t] = Ri[j + t]
+            z[ROUND_C, q + t] = Ci[j + t, 0]
+            z[ROUND_C + 1, q + t] = Ci[j + t, 1]
+            z[ROUND_C + 2, q + t] = Ci[j + t, 2]
+            z[ROUND_U, q + t] = Ui[j + t, 0]
+            z[ROUND_U + 1, q + t] = Ui[j + t, 1]
+            z[ROUND_U + 2, q + t] = Ui[j + t, 2]
+            z[ROUND_P, q + t] = Pi[j + t, 0]
+            z[ROUND_P + 1, q + t] = Pi[j + t, 1]
+            z[ROUND_P + 2, q + t] = Pi[j + t, 2]
+            z[ROUND_R, q + t] = Ri[j + t]
         q += run
         i += 1
         j = 0
-    _zero_tail(z, 0, 10, nb)
+    _zero_tail(z, ROUND_C, ROUND_R + 1, nb)
 
 
 @inline

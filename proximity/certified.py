@@ -44,7 +44,17 @@ from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
 from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale, unscale
 from ._jit import inline, part
-from ._loops import BLOCK, gather_triangles, scatter_triangles, store
+from ._loops import (
+    BLOCK,
+    PAIR_OK,
+    PAIR_OUT,
+    PAIR_P,
+    PAIR_ROWS,
+    gather_triangles,
+    scatter_triangles,
+    store,
+    triangle_at,
+)
 from .point_circle import decompose, rim_direction
 from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
 
@@ -371,28 +381,29 @@ def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
 
 
+# The certified block keeps each query's classified feature in the first of
+# the pairs' output rows until the results come back; its sorted copy ``w``
+# holds the inputs, the feature, the nine results and the status.
+Z_FEATURE = PAIR_OUT
+W_FEATURE, W_OUT, W_STATUS, W_ROWS = PAIR_P + 3, PAIR_P + 4, PAIR_P + 13, PAIR_P + 14
+
+
 @inline
 def _local_at(w, m):
-    """The exact differences of the query in column ``m`` of ``w`` (rows 0-11
-    as :func:`~._loops.gather_triangles`)."""
-    a, b, c, e0, e1, e2, _, _ = differences(
-        w[0, m], w[1, m], w[2, m], w[3, m], w[4, m], w[5, m],
-        w[6, m], w[7, m], w[8, m], w[9, m], w[10, m], w[11, m],
-    )  # fmt: skip
+    """The exact differences of the query in column ``m`` of ``w`` (its rows
+    of ``PAIR_V`` and ``PAIR_P``, as :func:`~._loops.gather_triangles`)."""
+    a, b, c, e0, e1, e2, _, _ = differences(*triangle_at(w, m))
     return a, b, c, e0, e1, e2
 
 
 @inline
 def _store_at(w, m, part, feature):
-    """A :func:`_vertex`-style result, finished, into rows 13-21 of ``w`` and its status into row 22."""
+    """A :func:`_vertex`-style result, finished, into the rows ``W_OUT`` of
+    ``w`` and its status into row ``W_STATUS``."""
     ok, r, s, x, y, z, b0, b1, b2 = part
-    res = finish(
-        (ok, r, s, x, y, z, feature, b0, b1, b2), 1.0,
-        w[0, m], w[1, m], w[2, m], w[3, m], w[4, m], w[5, m],
-        w[6, m], w[7, m], w[8, m], w[9, m], w[10, m], w[11, m],
-    )  # fmt: skip
-    store(w, 13, m, res[1:])
-    w[22, m] = res[0]
+    res = finish((ok, r, s, x, y, z, feature, b0, b1, b2), 1.0, *triangle_at(w, m))
+    store(w, W_OUT, m, res[1:])
+    w[W_STATUS, m] = res[0]
 
 
 @part
@@ -409,16 +420,13 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     undecided) are redone one by one by :func:`triangle`; ``exact`` flags
     the rows that even it left to the exact fallback.
     """
-    z = np.empty((22, BLOCK))
+    z = np.empty((PAIR_ROWS, BLOCK))
     gather_triangles(z, V, P, n_j, k0, nb)
     kinds = np.empty(BLOCK)
     for q in range(BLOCK):
-        a, b, c, e0, e1, e2, _, ok = differences(
-            z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
-            z[6, q], z[7, q], z[8, q], z[9, q], z[10, q], z[11, q],
-        )  # fmt: skip
+        a, b, c, e0, e1, e2, _, ok = differences(*triangle_at(z, q))
         f = _classify_local(a, b, c, e0, e1, e2)
-        z[12, q] = f
+        z[Z_FEATURE, q] = f
         kinds[q] = _kind(f) if ok else 3
     # Columns of w in kind order: vertices, edges, then faces.  The counts
     # are scalars: read from an array, the loops' bounds would be reloaded
@@ -427,7 +435,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     n_edge = 0
     n_face = 0
     for q in range(nb):
-        z[21, q] = 0.0
+        z[PAIR_OK, q] = 0.0
         k = kinds[q]
         n_vertex += k == 0.0
         n_edge += k == 1.0
@@ -446,45 +454,44 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
             order[i_face] = q
             i_face += 1
     n = n_vertex + n_edge + n_face
-    w = np.empty((23, BLOCK))
+    w = np.empty((W_ROWS, BLOCK))
     for m in range(n):
         q = order[m]
-        for row in range(13):
+        for row in range(PAIR_P + 3):
             w[row, m] = z[row, q]
+        w[W_FEATURE, m] = z[Z_FEATURE, q]
     # Each kind's loop indexes with an unsigned column, which the compiler
     # knows to be non-negative: with a signed one offset by a run-time start,
     # the index's wrap-around test keeps the loop from compiling to SIMD code.
     for k in range(n_vertex):
         m = uint64(k)
         a, b, c, _, _, _ = _local_at(w, m)
-        _store_at(w, m, _vertex(a, b, c, w[12, m]), w[12, m])
+        _store_at(w, m, _vertex(a, b, c, w[W_FEATURE, m]), w[W_FEATURE, m])
     for k in range(n_edge):
         m = uint64(n_vertex + k)
         a, b, c, e0, e1, e2 = _local_at(w, m)
-        _store_at(w, m, _edge(a, b, c, e0, e1, e2, w[12, m]), w[12, m])
+        _store_at(w, m, _edge(a, b, c, e0, e1, e2, w[W_FEATURE, m]), w[W_FEATURE, m])
     for k in range(n_face):
         m = uint64(n_vertex + n_edge + k)
         a, b, c, e0, e1, e2 = _local_at(w, m)
-        _store_at(w, m, _face(a, b, c, e0, e1, e2), w[12, m])
+        _store_at(w, m, _face(a, b, c, e0, e1, e2), w[W_FEATURE, m])
     for m in range(n):
         q = order[m]
         for row in range(9):
-            z[12 + row, q] = w[13 + row, m]
-        z[21, q] = w[22, m] == CERTAIN
+            z[PAIR_OUT + row, q] = w[W_OUT + row, m]
+        z[PAIR_OK, q] = w[W_STATUS, m] == CERTAIN
     for q in range(nb):
-        if z[21, q] != 0.0:
+        if z[PAIR_OK, q] != 0.0:
             continue
-        px, py, pz = z[9, q], z[10, q], z[11, q]
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-            res = triangle(
-                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
-            )
+            res = triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
             exact[k0 + q] = res[0] != CERTAIN
-            store(z, 12, q, res[1:])
+            store(z, PAIR_OUT, q, res[1:])
         else:
             nan = math.nan
-            store(z, 12, q, (nan, nan, nan, nan, nan, float(NONE), nan, nan, nan))
-    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
+            store(z, PAIR_OUT, q, (nan, nan, nan, nan, nan, float(NONE), nan, nan, nan))
+    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 @part

@@ -24,13 +24,22 @@ from ._loops import (
     A_IN2,
     A_IN3,
     BLOCK,
+    ONE_OK,
+    ONE_OUT,
+    ONE_P,
+    ONE_ROWS,
     OUT1,
     OUT2,
     OUT_FEATURE,
     OUT_FLAG,
+    ROUND_OK,
+    ROUND_OUT,
+    ROUND_ROWS,
     gather_points,
     gather_round,
     loop_views,
+    point_at,
+    round_at,
     scatter_round,
     single_entry,
     single_shape,
@@ -199,48 +208,35 @@ def _block(
 ):
     """Queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
-    Gathered into local scratch (rows 0-9 of ``z``: center, unit normal,
-    point, radius); for ``robust``, computed by a loop that compiles to SIMD
-    code (rows 10-18, and in row 19 whether the query was in its safe
-    window); every other row is done one by one on the scalar path, which
-    is the only path of the other methods.  Then scattered to the outputs.
+    Gathered into local scratch (the rows of ``ROUND_*``); for ``robust``,
+    computed by a loop that compiles to SIMD code (with, in row
+    ``ROUND_OK``, whether the query was in its safe window); every other
+    query is done one by one on the scalar path, which is the only path of
+    the other methods.  Then scattered to the outputs.
     """
-    z = np.empty((20, BLOCK))
+    z = np.empty((ROUND_ROWS, BLOCK))
     gather_round(z, C, U, P, R, n_j, k0, nb)
     if SIMD:
         for q in range(BLOCK):
-            res, ok = _robust_row(
-                is_disk,
-                z[0, q],
-                z[1, q],
-                z[2, q],
-                z[3, q],
-                z[4, q],
-                z[5, q],
-                z[9, q],
-                z[6, q],
-                z[7, q],
-                z[8, q],
-            )
-            store(z, 10, q, res)
-            z[19, q] = ok
+            cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
+            res, ok = _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+            store(z, ROUND_OUT, q, res)
+            z[ROUND_OK, q] = ok
     else:
         for q in range(nb):
-            z[19, q] = 0.0
+            z[ROUND_OK, q] = 0.0
     for q in range(nb):
-        if z[19, q] != 0.0:
+        if z[ROUND_OK, q] != 0.0:
             continue
         k = k0 + q
         i = k // n_j
         j = k - i * n_j
-        cert = QUERY(
-            is_disk, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q],
-            N[i, j, 0], N[i, j, 1], N[i, j, 2], z[9, q], z[6, q], z[7, q], z[8, q],
-        )  # fmt: skip
+        cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
+        cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, N[i, j, 0], N[i, j, 1], N[i, j, 2], radius, px, py, pz)
         if EXACT_FALLBACK:
             exact[k] = cert[0] != certified.CERTAIN
-        store(z, 10, q, cert[1:])
-    scatter_round(z, 10, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
+        store(z, ROUND_OUT, q, cert[1:])
+    scatter_round(z, ROUND_OUT, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
 @part
@@ -250,31 +246,35 @@ def _robust_block_one(
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
-    Only the points are gathered (rows 0-2).  The loop reads the shape as
-    scalars, so the compiler computes its own terms (such as the rim
-    direction used on the axis) once per block instead of once per query.
+    Only the points are gathered (the rows of ``ONE_*``).  The loop reads
+    the shape as scalars, so the compiler computes its own terms (such as
+    the rim direction used on the axis) once per block instead of once per
+    query.
     """
-    z = np.empty((13, BLOCK))
-    gather_points(z, 0, P, n_j, k0, nb)
+    z = np.empty((ONE_ROWS, BLOCK))
+    gather_points(z, ONE_P, P, n_j, k0, nb)
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
     # One loop for each kind, so that each compiles to the work of its kind only.
     if is_disk:
         for q in range(BLOCK):
-            res, ok = _robust_row(True, cx, cy, cz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
-            store(z, 3, q, res)
-            z[12, q] = ok
+            px, py, pz = point_at(z, ONE_P, q)
+            res, ok = _robust_row(True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+            store(z, ONE_OUT, q, res)
+            z[ONE_OK, q] = ok
     else:
         for q in range(BLOCK):
-            res, ok = _robust_row(False, cx, cy, cz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
-            store(z, 3, q, res)
-            z[12, q] = ok
+            px, py, pz = point_at(z, ONE_P, q)
+            res, ok = _robust_row(False, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+            store(z, ONE_OUT, q, res)
+            z[ONE_OK, q] = ok
     for q in range(nb):
-        if z[12, q] == 0.0:
+        if z[ONE_OK, q] == 0.0:
+            px, py, pz = point_at(z, ONE_P, q)
             # The robust method reads the unit normal only; it stands in for the normal as given.
-            res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, z[0, q], z[1, q], z[2, q])
-            store(z, 3, q, res[1:])
-    scatter_round(z, 3, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
+            res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
+            store(z, ONE_OUT, q, res[1:])
+    scatter_round(z, ONE_OUT, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
 _BATCH_SIGNATURE = types.void(

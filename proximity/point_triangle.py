@@ -74,16 +74,25 @@ from ._loops import (
     A_IN3,
     A_IN4,
     BLOCK,
+    ONE_OK,
+    ONE_OUT,
+    ONE_P,
+    ONE_ROWS,
     OUT1,
     OUT2,
     OUT_FEATURE,
     OUT_FLAG,
+    PAIR_OK,
+    PAIR_OUT,
+    PAIR_ROWS,
     gather_points,
     gather_triangles,
     loop_views,
+    point_at,
     scatter_triangles,
     single_shape,
     store,
+    triangle_at,
 )
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
@@ -554,38 +563,41 @@ _NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, ma
 def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
-    Gathered into local scratch (rows 0-11 of ``z``), computed by a loop that
-    compiles to SIMD code (rows 12-20, and in row 21 whether the query was in
-    the safe window), then redone one by one on the scalar path where it was
-    not, and scattered to the outputs.
+    Gathered into local scratch (the rows of ``PAIR_*``), computed by a loop
+    that compiles to SIMD code (with, in row ``PAIR_OK``, whether the query
+    was in the safe window), then redone one by one on the scalar path where
+    it was not, and scattered to the outputs.
     """
-    z = np.empty((22, BLOCK))
+    z = np.empty((PAIR_ROWS, BLOCK))
     gather_triangles(z, V, P, n_j, k0, nb)
     for q in range(BLOCK):
-        px, py, pz = z[9, q], z[10, q], z[11, q]
-        ax, ay, az = z[0, q] - px, z[1, q] - py, z[2, q] - pz
-        bx, by, bz = z[3, q] - px, z[4, q] - py, z[5, q] - pz
-        cx, cy, cz = z[6, q] - px, z[7, q] - py, z[8, q] - pz
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
+        ax, ay, az = v0x - px, v0y - py, v0z - pz
+        bx, by, bz = v1x - px, v1y - py, v1z - pz
+        cx, cy, cz = v2x - px, v2y - py, v2z - pz
         _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
         res = _finish(
             _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
-            UNSCALED, z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q],
-            px, py, pz,
+            UNSCALED, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
         )  # fmt: skip
-        store(z, 12, q, res)
-        z[21, q] = ok
+        store(z, PAIR_OUT, q, res)
+        z[PAIR_OK, q] = ok
     for q in range(nb):
-        if z[21, q] != 0.0:
+        if z[PAIR_OK, q] != 0.0:
             continue
-        px, py, pz = z[9, q], z[10, q], z[11, q]
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-            res = robust(
-                z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q], px, py, pz
-            )
-            store(z, 12, q, res)
+            res = robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
+            store(z, PAIR_OUT, q, res)
         else:
-            store(z, 12, q, _NAN_ROW)
-    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
+            store(z, PAIR_OUT, q, _NAN_ROW)
+    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
+
+
+# The seed's method on pairs keeps the coefficients, then the choice of
+# ``s, t`` and the feature, in the output rows until the results replace them.
+_TERMS = PAIR_OUT
+_CHOICE = PAIR_OUT + 5
 
 
 @part
@@ -594,57 +606,74 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     point are the only ones it leaves, and get NaN.
 
     The query runs in three passes over the block: the coefficients (rows
-    12-16), the choice of ``s, t`` and the feature (rows 17-19), and the
-    result row.  As one pass, the loop keeps more values live than there are
-    registers; the passes do the same operations with fewer moves to the
-    stack (``docs/performance.md``).
+    ``_TERMS``), the choice of ``s, t`` and the feature (rows ``_CHOICE``),
+    and the result row.  As one pass, the loop keeps more values live than
+    there are registers; the passes do the same operations with fewer moves
+    to the stack (``docs/performance.md``).
     """
-    z = np.empty((22, BLOCK))
+    z = np.empty((PAIR_ROWS, BLOCK))
     gather_triangles(z, V, P, n_j, k0, nb)
     for q in range(BLOCK):
-        v0x, v0y, v0z = z[0, q], z[1, q], z[2, q]
-        e0x, e0y, e0z = z[3, q] - v0x, z[4, q] - v0y, z[5, q] - v0z
-        e1x, e1y, e1z = z[6, q] - v0x, z[7, q] - v0y, z[8, q] - v0z
-        coefficients = eberly_terms(v0x, v0y, v0z, e0x, e0y, e0z, e1x, e1y, e1z, z[9, q], z[10, q], z[11, q])
-        z[12, q], z[13, q], z[14, q], z[15, q], z[16, q] = coefficients
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
+        e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
+        e1x, e1y, e1z = v2x - v0x, v2y - v0y, v2z - v0z
+        terms = eberly_terms(v0x, v0y, v0z, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz)
+        z[_TERMS, q], z[_TERMS + 1, q], z[_TERMS + 2, q], z[_TERMS + 3, q], z[_TERMS + 4, q] = terms
     for q in range(BLOCK):
-        z[17, q], z[18, q], z[19, q] = eberly_choice(z[12, q], z[13, q], z[14, q], z[15, q], z[16, q])
+        a, b, c = z[_TERMS, q], z[_TERMS + 1, q], z[_TERMS + 2, q]
+        z[_CHOICE, q], z[_CHOICE + 1, q], z[_CHOICE + 2, q] = eberly_choice(
+            a, b, c, z[_TERMS + 3, q], z[_TERMS + 4, q]
+        )
     for q in range(BLOCK):
-        px, py, pz = z[9, q], z[10, q], z[11, q]
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         res = _eberly_point(
-            z[0, q], z[1, q], z[2, q], z[3, q], z[4, q], z[5, q], z[6, q], z[7, q], z[8, q],
-            px, py, pz, z[17, q], z[18, q], z[19, q],
-        )  # fmt: skip
-        store(z, 12, q, res)
-        z[21, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
+            v0x,
+            v0y,
+            v0z,
+            v1x,
+            v1y,
+            v1z,
+            v2x,
+            v2y,
+            v2z,
+            px,
+            py,
+            pz,
+            z[_CHOICE, q],
+            z[_CHOICE + 1, q],
+            z[_CHOICE + 2, q],
+        )
+        store(z, PAIR_OUT, q, res)
+        z[PAIR_OK, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
     for q in range(nb):
-        if z[21, q] == 0.0:
-            store(z, 12, q, _NAN_ROW)
-    scatter_triangles(z, 12, k0, nb, dist, sqr, point, feature, bary, full)
+        if z[PAIR_OK, q] == 0.0:
+            store(z, PAIR_OUT, q, _NAN_ROW)
+    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 @part
 def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
     """:func:`_eberly_block` for a batch against one triangle, ``V[0, 0]``.
 
-    Only the points are gathered (rows 0-2).  The loop reads the vertices as
-    scalars, so the compiler computes the triangle's own terms (its edges,
-    ``a``, ``b``, ``c`` and ``det``) once per block instead of once per query.
+    Only the points are gathered (the rows of ``ONE_*``).  The loop reads
+    the vertices as scalars, so the compiler computes the triangle's own
+    terms (its edges, ``a``, ``b``, ``c`` and ``det``) once per block instead
+    of once per query.
     """
-    z = np.empty((13, BLOCK))
-    gather_points(z, 0, P, n_j, k0, nb)
+    z = np.empty((ONE_ROWS, BLOCK))
+    gather_points(z, ONE_P, P, n_j, k0, nb)
     v = V[0, 0]
     v0x, v0y, v0z, v1x, v1y, v1z = v[0, 0], v[0, 1], v[0, 2], v[1, 0], v[1, 1], v[1, 2]
     v2x, v2y, v2z = v[2, 0], v[2, 1], v[2, 2]
     for q in range(BLOCK):
-        px, py, pz = z[0, q], z[1, q], z[2, q]
+        px, py, pz = point_at(z, ONE_P, q)
         res = _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
-        store(z, 3, q, res)
-        z[12, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
+        store(z, ONE_OUT, q, res)
+        z[ONE_OK, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
     for q in range(nb):
-        if z[12, q] == 0.0:
-            store(z, 3, q, _NAN_ROW)
-    scatter_triangles(z, 3, k0, nb, dist, sqr, point, feature, bary, full)
+        if z[ONE_OK, q] == 0.0:
+            store(z, ONE_OUT, q, _NAN_ROW)
+    scatter_triangles(z, ONE_OUT, k0, nb, dist, sqr, point, feature, bary, full)
 
 
 # Per method: the query of one point, and the block functions of the batch
