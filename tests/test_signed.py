@@ -329,3 +329,48 @@ def test_pickled_meshes_keep_their_signs_and_send_no_cache():
     assert copy._signs is None
     np.testing.assert_array_equal(copy.signed_distance(points), before)
     assert len(pickle.dumps(mesh)) == len(pickle.dumps(TriangleMesh(*MESHES["torus"])))
+
+
+# -- the trimesh drop-ins ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["icosphere", "torus", "box"])
+def test_trimesh_drop_ins_agree_with_trimesh(name):
+    pytest.importorskip("rtree")
+    pytest.importorskip("scipy")
+    from proximity import trimesh_compat
+
+    tm = _closed_meshes()[name]
+    points = _points(name, seed=7)
+    theirs = trimesh.proximity.signed_distance(tm, points)
+    ours = trimesh_compat.signed_distance(tm, points)
+    assert type(ours) is type(theirs) and ours.shape == theirs.shape and ours.dtype == theirs.dtype
+    assert ours.flags.writeable
+    # trimesh's convention, positive inside: the opposite of TriangleMesh.signed_distance.
+    np.testing.assert_array_equal(ours, -TriangleMesh(tm).signed_distance(points))
+    # The same side wherever trimesh decides one (it calls points within tol.merge positive).
+    decided = np.abs(theirs) > trimesh.tol.merge
+    assert decided.mean() > 0.95 and (np.sign(ours) == np.sign(theirs))[decided].all()
+    # trimesh's distance is to a face it found, ours to the nearest: never farther, nearly always equal.
+    assert (np.abs(ours) <= np.abs(theirs) + 1e-12).all()
+    assert np.isclose(np.abs(ours), np.abs(theirs), rtol=0, atol=1e-12).mean() >= 0.98
+
+    query, their_query = trimesh_compat.ProximityQuery(tm), trimesh.proximity.ProximityQuery(tm)
+    np.testing.assert_array_equal(query.signed_distance(points), ours)
+    for a, b in zip(query.on_surface(points), trimesh_compat.closest_point(tm, points), strict=True):
+        np.testing.assert_array_equal(a, b)
+    distance, vertex = query.vertex(points)
+    their_distance, their_vertex = their_query.vertex(points)
+    np.testing.assert_allclose(distance, their_distance, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(vertex, their_vertex)
+
+
+def test_trimesh_drop_ins_refuse_what_they_cannot_answer():
+    from proximity import trimesh_compat
+
+    with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
+        trimesh_compat.signed_distance(OCTAHEDRON, [0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="needs a closed mesh"):
+        trimesh_compat.signed_distance((OCTAHEDRON[0], OCTAHEDRON[1][1:]), [[0.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
+        trimesh_compat.ProximityQuery(OCTAHEDRON).vertex(np.zeros((2, 2)))
