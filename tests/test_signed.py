@@ -18,8 +18,6 @@ from proximity.testing import exact
 
 trimesh = pytest.importorskip("trimesh")
 
-EPS = 2.0**-52
-
 
 def _closed_meshes():
     box = trimesh.creation.box(extents=[1.0, 2.0, 0.5])
@@ -308,6 +306,23 @@ def test_meshes_that_are_not_closed_are_refused_unless_the_winding_number_is_ask
     signed = mesh.signed_distance([[0.0, 0.0, 0.0], [0.0, 0.0, 3.0]], sign="winding")
     assert signed[0] < 0 < signed[1]
     assert mesh.contains([0.0, 0.0, 0.1], sign="winding")
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_points_the_pseudonormal_leaves_undecided_get_the_same_sign_from_the_winding_number(
+    name, monkeypatch
+):
+    vertices, faces = MESHES[name]
+    points = np.concatenate(
+        [_points(name, seed=9), _off_features(vertices, faces, np.random.default_rng(9), 1e-9)[0]]
+    )
+    decided = TriangleMesh(vertices, faces).signed_distance(points)
+    calls = []
+    winding = _signed.winding_numbers
+    monkeypatch.setattr(_signed, "winding_numbers", lambda v, f, p: calls.append(len(p)) or winding(v, f, p))
+    monkeypatch.setattr(_signed, "MARGIN", 1.0)  # a margin no product clears: every point undecided
+    np.testing.assert_array_equal(TriangleMesh(vertices, faces).signed_distance(points), decided)
+    assert calls == [len(points)]
 
 
 def test_winding_numbers_are_one_inside_and_zero_outside_a_closed_mesh():
