@@ -36,7 +36,7 @@ and ``families``: records in the format of :mod:`benchmarks.suite` (kind
 ``"mesh"``) with ``d_exact``, ``scale`` and per-entity ``error_eps_s``,
 ``error_ulps`` and ``timing``, for the accuracy-against-speed chart.
 
-**The peers** (``run_peers``; about half an hour, ``--quick`` half a
+**The peers** (``run_peers``; about ten minutes on two cores, ``--quick`` half a
 minute) compare proximity with each library of :mod:`benchmarks.peers`
 (Open3D, libigl, Warp on the CPU, coal, python-fcl, point-cloud-utils,
 trimesh), each in a process of its own, on trimesh's icospheres of 20,480
