@@ -1,9 +1,13 @@
-"""Meshes: proximity against trimesh and fcl, BVH build time and memory, in one run.
+"""Meshes: proximity against trimesh and fcl, BVH build time and memory; and against every peer.
 
     python -m benchmarks.meshes [--quick] [--out DIR] [--seed 0] [--write docs/performance.md]
+                                [--no-peers | --peers-only] [--peer NAME ...]
     python -m benchmarks.meshes --crossover      # brute force against the BVH, n = 4..256
 
-The default run (about a minute) builds a torus of 20,000 triangles and two
+The run has two parts; ``--write`` rewrites the section of each part that
+ran (markers ``mesh-bench`` and ``mesh-peers``).
+
+**The torus** (about a minute) builds a torus of 20,000 triangles and two
 seeded sets of 100,000 points: *near* (on the surface, moved along the
 face normal by a normal deviate of 1% of the torus' size) and *box*
 (uniform in the mesh's bounding box).  It measures:
@@ -31,6 +35,23 @@ point set: ``n``, ``seconds``, ``qps``), ``ratios``, ``build``, ``memory``,
 and ``families``: records in the format of :mod:`benchmarks.suite` (kind
 ``"mesh"``) with ``d_exact``, ``scale`` and per-entity ``error_eps_s``,
 ``error_ulps`` and ``timing``, for the accuracy-against-speed chart.
+
+**The peers** (``run_peers``; about ten minutes on two cores, ``--quick`` half a
+minute) compare proximity with each library of :mod:`benchmarks.peers`
+(Open3D, libigl, Warp on the CPU, coal, python-fcl, point-cloud-utils,
+trimesh), each in a process of its own, on trimesh's icospheres of 20,480
+and 1,310,720 faces and a torus of 1,000,000 faces (``--quick``: 1,280,
+20,480 and 20,000), with 100,000 points per set (``--quick``: 5,000):
+*near* as above and *box*, uniform in 1.5 times the bounding box.  For
+each library: the build time; points per second of the unsigned and of the
+signed distance, on one thread and on all; the largest error against the
+exact distance on the first 200 points (``--quick``: 50); the points whose
+distance is off the ``certified`` one (within an ulp of the exact
+distance) by more than the library's precision allows, which is a face
+that is not the nearest; and the wrong signs, on points farther than
+``SIGN_BAND`` of the size from the surface, against the solid itself
+(:func:`reference_inside`).  A library that does not install or import is
+skipped with the reason.  ``OUT/mesh_peers.json`` holds the raw data.
 
 ``--crossover`` times brute force against the BVH on 10,000 points
 uniform in the bounding box of ``n`` triangles scattered in a unit cube,
@@ -171,9 +192,10 @@ def reference(vertices, faces, points):
     """
     tri = vertices[faces]
     longest = float(np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=-1)))
+    every_face = proximity.Triangle(tri)
     out = []
     for p in points:
-        d = proximity.Triangle(tri).distance(p)
+        d = every_face.distance(p)
         least = float(np.min(d))
         candidates = np.flatnonzero(d <= least + 32.0 * EPS * (least + longest))
         face = min(candidates, key=lambda f: exact.triangle_sqr_distance(tri[f], p))
@@ -583,14 +605,361 @@ def markdown(raw, path="docs/performance.md"):
     return "\n".join(lines)
 
 
-def write_section(path, text):
-    """Replace the text between the mesh-bench markers of ``path``."""
+def write_section(path, text, marker="mesh-bench"):
+    """Replace the text between the ``marker`` markers of ``path``."""
     page = Path(path).read_text(encoding="utf-8")
-    pattern = re.compile(r"(<!-- mesh-bench:start -->\n).*?(<!-- mesh-bench:end -->)", re.S)
+    pattern = re.compile(rf"(<!-- {marker}:start -->\n).*?(<!-- {marker}:end -->)", re.S)
     if not pattern.search(page):
-        raise SystemExit(f"{path} has no mesh-bench markers")
+        raise SystemExit(f"{path} has no {marker} markers")
     page = pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), page)
     Path(path).write_text(page, encoding="utf-8")
+
+
+# -- the peers ---------------------------------------------------------------------------
+
+#: ``(label, kind, size)`` of the meshes the peers are compared on: trimesh's
+#: icospheres of ``subdivisions`` (20 * 4^size faces) and :func:`torus`.
+PEER_MESHES = {
+    False: (("icosphere, 20,480 faces", "icosphere", 5), ("icosphere, 1,310,720 faces", "icosphere", 8),
+            ("torus, 1,000,000 faces", "torus", (1000, 500))),
+    True: (("icosphere, 1,280 faces", "icosphere", 3), ("icosphere, 20,480 faces", "icosphere", 5),
+           ("torus, 20,000 faces", "torus", (100, 100))),
+}  # fmt: skip
+
+#: A point nearer the surface than this fraction of the mesh's size may get either sign.
+SIGN_BAND = 1e-9
+
+
+def peer_mesh(kind, size):
+    """``(vertices, faces)`` of a mesh of :data:`PEER_MESHES`."""
+    if kind == "torus":
+        return torus(*size)
+    try:
+        import trimesh
+    except ImportError:
+        return icosphere(size)
+    sphere = trimesh.creation.icosphere(subdivisions=size)
+    return np.ascontiguousarray(sphere.vertices, dtype=np.float64), np.ascontiguousarray(
+        sphere.faces, np.int64
+    )
+
+
+def reference_inside(kind, size, vertices, faces, points):
+    """Whether each point is inside the solid, known from the solid itself.
+
+    The icosphere is convex with its vertices on the unit sphere: a point
+    beyond radius 1 is outside, one within the least distance from the
+    centre to a face's plane is inside.  The torus's vertices are on the
+    torus of radii 1 and 0.35, and its faces stray from it by less than
+    their sagittas: a point farther than twice that from the analytic torus
+    is on the side the analytic torus says.  The points in between (few)
+    are decided by the generalized winding number over every face.
+
+    Returns ``(inside, by_winding)``, boolean arrays.
+    """
+    from proximity import _signed
+
+    if kind == "icosphere":
+        tri = vertices[faces]
+        normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        inradius = np.min(np.einsum("ij,ij->i", normal, tri[:, 0]) / np.linalg.norm(normal, axis=1))
+        radius = np.linalg.norm(points, axis=1)
+        inside = radius < inradius * (1 - 1e-12)
+        doubt = ~inside & (radius <= 1 + 1e-12)
+    else:
+        n_major, n_minor = size
+        stray = 1.35 * (1 - np.cos(np.pi / n_major)) + 0.35 * (1 - np.cos(np.pi / n_minor))
+        ring = np.hypot(points[:, 0], points[:, 1]) - 1.0
+        analytic = np.hypot(ring, points[:, 2]) - 0.35
+        inside = analytic < 0
+        doubt = np.abs(analytic) <= 2 * stray
+    rows = np.flatnonzero(doubt)
+    if len(rows):
+        mesh = proximity.TriangleMesh(vertices, faces, broad_phase="brute")
+        inside[rows] = _signed.winding_numbers(mesh.vertices, mesh.faces, points[rows]) > 0.5
+    return inside, doubt
+
+
+def _peer_child(name, data_path, threads, answers_path):
+    """One peer's run in a new process (see :mod:`benchmarks.peers`); its JSON record."""
+    root = Path(__file__).resolve().parent.parent
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]),
+        OMP_NUM_THREADS=str(threads),
+        IGL_NUM_THREADS=str(threads),
+    )
+    args = [sys.executable, "-m", "benchmarks.peers", name, str(data_path), str(threads), str(answers_path)]
+    done = subprocess.run(args, capture_output=True, text=True, cwd=root, env=env, check=False)
+    if done.returncode != 0:
+        lines = done.stderr.strip().splitlines()
+        return {"error": lines[-1] if lines else f"exit code {done.returncode}"}
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _unsigned_errors(distance, ref, precision, points):
+    """Max error on the exact sample; rows off the ``certified`` distance by more than the precision."""
+    n = len(distance)
+    unit = 2.0**-24 if precision == "float32" else 2.0**-53
+    d_ref = ref["certified"][:n]
+    # Inputs rounded to the peer's precision move a distance by a few units of
+    # the coordinates' magnitude; its arithmetic adds a few more.
+    magnitude = ref["magnitude"] + np.max(np.abs(ref["points"][:n]), axis=1)
+    with np.errstate(invalid="ignore"):
+        off = ~np.isfinite(distance) | (np.abs(distance - d_ref) > 16.0 * unit * magnitude)
+    k = min(n, len(ref["exact"]))
+    with np.errstate(invalid="ignore"):
+        max_error = float(np.max(np.abs(distance[:k] - ref["exact"][:k])))
+    return {"n": int(n), "off": int(off.sum()), "max_error": max_error, "sample": int(k)}
+
+
+def _sign_errors(signed, ref, size):
+    n = len(signed)
+    far = ref["certified"][:n] > SIGN_BAND * size
+    wrong = far & (~np.isfinite(signed) | ((signed < 0) != ref["inside"][:n]))
+    return {"n": int(n), "judged": int(far.sum()), "wrong": int(wrong.sum())}
+
+
+def run_peers(quick=False, seed=0, out=Path("bench-results"), names=None, log=print):
+    """proximity against every peer of :mod:`benchmarks.peers` on :data:`PEER_MESHES`.
+
+    Returns the JSON-ready record: ``meta`` and, per mesh, ``faces``,
+    ``reference`` (seconds and counts) and per peer ``runs``: the children's
+    records by thread count, with the errors of their answers.
+    """
+    import numba
+
+    from benchmarks import peers
+
+    n_points, n_exact = (5_000, 50) if quick else (100_000, 200)
+    threads_all = numba.config.NUMBA_NUM_THREADS
+    work = Path(out) / "peers"
+    work.mkdir(parents=True, exist_ok=True)
+    names = list(peers.PEERS) if names is None else names
+    raw = {
+        "meta": {
+            "command": "python -m benchmarks.meshes" + (" --quick" if quick else ""),
+            "seed": seed,
+            "points": n_points,
+            "exact_sample": n_exact,
+            "cpus": os.cpu_count(),
+            "threads_all": threads_all,
+            "load_average": [os.getloadavg()],
+        },
+        "meshes": {},
+    }
+    for label, kind, size in PEER_MESHES[quick]:
+        rng = np.random.default_rng(seed)
+        vertices, faces = peer_mesh(kind, size)
+        low, high = vertices.min(axis=0), vertices.max(axis=0)
+        extent = float(np.max(high - low))
+        centre = (low + high) / 2
+        sets = {
+            "near": near_points(rng, vertices, faces, n_points, 0.01 * extent),
+            "box": centre + 1.5 * (box_points(rng, vertices, n_points) - centre),
+        }
+        data_path = work / f"{kind}-{len(faces)}.npz"
+        np.savez(data_path, vertices=vertices, faces=faces, **sets)
+        log(f"{label}: the reference (certified distances, exact on {n_exact} points, signs)")
+        start = time.perf_counter()
+        mesh = proximity.TriangleMesh(vertices, faces)
+        refs = {}
+        for name, points in sets.items():
+            inside, by_winding = reference_inside(kind, size, vertices, faces, points)
+            refs[name] = {
+                "points": points,
+                "certified": np.asarray(mesh.distance(points, method="certified")),
+                "exact": np.array([float(d) for d, _ in reference(vertices, faces, points[:n_exact])]),
+                "magnitude": float(np.max(np.abs(vertices))),
+                "inside": inside,
+                "by_winding": int(by_winding.sum()),
+            }
+        del mesh
+        entry = {
+            "faces": len(faces),
+            "size": extent,
+            "reference": {
+                "seconds": time.perf_counter() - start,
+                "by_winding": {name: ref["by_winding"] for name, ref in refs.items()},
+                "inside": {name: int(ref["inside"].sum()) for name, ref in refs.items()},
+            },
+            "peers": {},
+        }
+        for name in names:
+            peer = peers.PEERS[name]
+            runs = {}
+            for threads in [1] if peer.threads == "one" else [1, threads_all]:
+                answers_path = work / f"answers-{name}-{threads}.npz"
+                record = _peer_child(name, data_path, threads, answers_path)
+                if "sets" in record:
+                    answers = np.load(answers_path)
+                    for set_name, ref in refs.items():
+                        timings = record["sets"][set_name]
+                        timings["unsigned"]["errors"] = _unsigned_errors(
+                            answers[f"{set_name}.unsigned"], ref, peer.precision, ref["points"]
+                        )
+                        if "signed" in timings:
+                            timings["signed"]["errors"] = _sign_errors(
+                                answers[f"{set_name}.signed"], ref, extent
+                            )
+                    answers_path.unlink()
+                runs[str(threads)] = record
+                log(f"  {name}, {threads} thread(s): " + _brief(record))
+            entry["peers"][name] = {
+                "label": peer.label,
+                "precision": peer.precision,
+                "threads": peer.threads,
+                "runs": runs,
+            }
+        raw["meshes"][label] = entry
+        data_path.unlink()
+        raw["meta"]["load_average"].append(os.getloadavg())
+    return raw
+
+
+def _brief(record):
+    if "sets" not in record:
+        return record.get("skipped") or record.get("error", "?")
+    cells = [f"build {record['build']:.2f} s"]
+    for name, timings in record["sets"].items():
+        for kind, timing in timings.items():
+            cells.append(f"{name} {kind} {timing['qps']:,.0f}/s")
+    return ", ".join(cells)
+
+
+def _qps(entry, name, threads, set_name, kind):
+    record = entry["peers"].get(name, {}).get("runs", {}).get(str(threads), {})
+    timing = record.get("sets", {}).get(set_name, {}).get(kind)
+    return None if timing is None else timing["qps"]
+
+
+def peers_summary(raw):
+    """Per mesh, point set, query kind and thread count: proximity's speed over the fastest peer's."""
+    threads_all = raw["meta"]["threads_all"]
+    rows = []
+    for label, entry in raw["meshes"].items():
+        for set_name in ("near", "box"):
+            for kind in ("unsigned", "signed"):
+                for threads in (1, threads_all):
+                    ours = _qps(entry, "proximity", threads, set_name, kind)
+                    best = None
+                    for name, peer in entry["peers"].items():
+                        # A one-thread peer is its own best on all threads.
+                        qps = _qps(entry, name, 1 if peer["threads"] == "one" else threads, set_name, kind)
+                        if name != "proximity" and qps is not None and (best is None or qps > best[1]):
+                            best = (peer["label"], qps)
+                    if ours is not None and best is not None:
+                        rows.append((label, set_name, kind, threads, ours, best[0], best[1], ours / best[1]))
+    return rows
+
+
+def peers_report(raw):
+    """The peers' run as text."""
+    lines = []
+    for label, entry in raw["meshes"].items():
+        lines.append(f"{label} (reference: {entry['reference']['seconds']:.0f} s)")
+        for name, peer in entry["peers"].items():
+            for threads, record in peer["runs"].items():
+                lines.append(f"  {name:10s} {threads} thread(s): {_brief(record)}")
+                for set_name, timings in record.get("sets", {}).items():
+                    for kind, timing in timings.items():
+                        errors = timing.get("errors", {})
+                        lines.append(f"    {set_name} {kind}: n={timing['n']} {errors}")
+    lines.append("proximity / fastest peer:")
+    for label, set_name, kind, threads, ours, name, best, ratio in peers_summary(raw):
+        lines.append(
+            f"  {label}, {set_name}, {kind}, {threads} thread(s): "
+            f"{ours:,.0f} / {best:,.0f} ({name}) = {ratio:.2f}x"
+        )
+    return "\n".join(lines)
+
+
+def _cell(value, digits=3):
+    return "" if value is None else f"{value:,.0f}" if value >= 100 else f"{value:.{digits}g}"
+
+
+def peers_markdown(raw, path="docs/performance.md"):
+    """Tables of the peers' run for the page at ``path``: per mesh, unsigned and signed."""
+    meta = raw["meta"]
+    threads_all = meta["threads_all"]
+    load = ", ".join(f"{x:.1f}" for x in meta["load_average"][-1])
+    lines = [
+        f"{meta['points']:,} points per set: *near* (on the surface, moved along the normal by a normal "
+        f"deviate of 1% of the size) and *box* (uniform in 1.5 times the bounding box). Points per second "
+        f"on 1 and {threads_all} threads; each library in a process of its own, timed on as many of the "
+        f"points as it answers in about a second (*n*; every point where a call builds a tree), median of "
+        f"up to 3 calls. *max error*: against the "
+        f"exact distance on the first {meta['exact_sample']} points; *off*: points whose distance differs "
+        f"from the `certified` one (within an ulp of the exact distance) by more than 16 units of the "
+        f"library's precision times the coordinates' magnitude: a face that is not the nearest, or no "
+        f"answer. *wrong signs*: against the solid the mesh approximates, on points farther than "
+        f"{SIGN_BAND:g} of the size from the surface. libigl's `signed_distance` and both of "
+        f"point-cloud-utils' functions build their tree in every call, as their Python functions do; Warp "
+        f"runs its CPU kernels on one thread, and coal, fcl and trimesh answer one point at a time "
+        f"(= 1 thread). "
+        f"Made by `python -m benchmarks.meshes --write {path}` "
+        f"on {meta['cpus']} cores shared with other jobs (load average at the end {load}).",
+    ]
+    for label, entry in raw["meshes"].items():
+        lines += ["", f"**{label[0].upper() + label[1:]}**", ""]
+        lines += [
+            f"| unsigned | precision | build (s) | near, 1 thread | near, {threads_all} threads | "
+            f"box, 1 thread | box, {threads_all} threads | max error (near, box) | off (near, box) |",
+            "|---|---|---:|---:|---:|---:|---:|---|---|",
+        ]
+        signed_rows, skipped = [], []
+        for name, peer in entry["peers"].items():
+            runs = peer["runs"]
+            first = runs.get("1", {})
+            if "sets" not in first:
+                skipped.append(f"{peer['label']}: {first.get('skipped') or first.get('error')}")
+                continue
+            build = runs.get(str(threads_all), first)["build"]
+            speeds, errors, signed, wrong = [], [], [], []
+            for set_name in ("near", "box"):
+                for threads in (1, threads_all):
+                    speeds.append(_qps(entry, name, threads, set_name, "unsigned"))
+                    signed.append(_qps(entry, name, threads, set_name, "signed"))
+                e = first["sets"][set_name]["unsigned"]["errors"]
+                errors.append((e["max_error"], e["off"], e["n"]))
+                if "signed" in first["sets"][set_name]:
+                    w = first["sets"][set_name]["signed"]["errors"]
+                    wrong.append(f"{w['wrong']:,} of {w['judged']:,}")
+            one = peer["threads"] == "one"
+            cells = [_cell(v) if v is not None else ("= 1 thread" if one else "") for v in speeds]
+            max_error = ", ".join(f"{e[0]:.2g}" for e in errors)
+            off = ", ".join(f"{e[1]:,} of {e[2]:,}" for e in errors)
+            lines.append(
+                f"| {peer['label']} | {peer['precision']} | {build:.2f} | "
+                + " | ".join(cells)
+                + f" | {max_error} | {off} |"
+            )
+            if wrong:
+                cells = [_cell(v) if v is not None else ("= 1 thread" if one else "") for v in signed]
+                prepare = first.get("prepare_signed")
+                extra = f" (+{prepare:.2f} s pseudonormals)" if prepare is not None else ""
+                signed_rows.append(
+                    f"| {peer['label']}{extra} | " + " | ".join(cells) + f" | {', '.join(wrong)} |"
+                )
+        lines += [
+            "",
+            f"| signed | near, 1 thread | near, {threads_all} threads | box, 1 thread | "
+            f"box, {threads_all} threads | wrong signs (near, box) |",
+            "|---|---:|---:|---:|---:|---|",
+            *signed_rows,
+        ]
+        if skipped:
+            lines += ["", "Not run: " + "; ".join(skipped) + "."]
+    lines += ["", "proximity's speed over the fastest other library's, same points and threads:", ""]
+    lines += [
+        "| mesh | points | query | threads | proximity | fastest other | ratio |",
+        "|---|---|---|---:|---:|---|---:|",
+    ]
+    for label, set_name, kind, threads, ours, name, best, ratio in peers_summary(raw):
+        lines.append(
+            f"| {label} | {set_name} | {kind} | {threads} | {ours:,.0f} | {name} {best:,.0f} | {ratio:.2f}x |"
+        )
+    return "\n".join(lines)
 
 
 def crossover(seed=0, sizes=(4, 8, 12, 16, 24, 32, 48, 64, 128, 256), n_points=10_000, repeats=15, log=print):
@@ -643,6 +1012,9 @@ def main(argv=None):
     parser.add_argument(
         "--write", metavar="PATH", help="rewrite the mesh-bench section of this page (docs/performance.md)"
     )
+    parser.add_argument("--no-peers", action="store_true", help="skip the comparison with other libraries")
+    parser.add_argument("--peers-only", action="store_true", help="only the comparison with other libraries")
+    parser.add_argument("--peer", action="append", help="compare with this library only (repeatable)")
     parser.add_argument("--memory-child", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.memory_child:
@@ -652,15 +1024,24 @@ def main(argv=None):
     if args.crossover:
         crossover(seed=args.seed)
         return 0
-    with np.errstate(all="ignore"):
-        raw = run(quick=args.quick, seed=args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "meshes.json").write_text(json.dumps(raw, indent=1))
-    print(report(raw))
-    print(f"raw data: {out / 'meshes.json'}")
-    if args.write:
-        write_section(args.write, markdown(raw, args.write))
+    if not args.peers_only:
+        with np.errstate(all="ignore"):
+            raw = run(quick=args.quick, seed=args.seed)
+        (out / "meshes.json").write_text(json.dumps(raw, indent=1))
+        print(report(raw))
+        print(f"raw data: {out / 'meshes.json'}")
+        if args.write:
+            write_section(args.write, markdown(raw, args.write))
+    if not args.no_peers:
+        with np.errstate(all="ignore"):
+            raw = run_peers(quick=args.quick, seed=args.seed, out=out, names=args.peer)
+        (out / "mesh_peers.json").write_text(json.dumps(raw, indent=1))
+        print(peers_report(raw))
+        print(f"raw data: {out / 'mesh_peers.json'}")
+        if args.write:
+            write_section(args.write, peers_markdown(raw, args.write), marker="mesh-peers")
     return 0
 
 

@@ -57,6 +57,15 @@ def _broad_phase():
     bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
 
 
+def _winding():
+    """The winding number of the signed distance, for a mesh's read-only arrays."""
+    from . import _signed
+    from .mesh import TriangleMesh
+
+    mesh = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    _signed.winding_numbers(mesh.vertices, mesh.faces, np.zeros((1, 3)))
+
+
 def compile_all(methods=None, log=sys.stdout):
     """Compile the kernels of ``methods`` (default: every method) and of the broad phase.
 
@@ -75,6 +84,7 @@ def compile_all(methods=None, log=sys.stdout):
     names = list(_methods.REGISTRY) if methods is None else list(methods)
     jobs = [job for name in names for job in _jobs(name)]
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
+    jobs.append(("mesh: winding number of the signed distance", _winding))
     done = {}
     for k, (description, job) in enumerate(jobs, 1):
         start = time.perf_counter()

@@ -13,9 +13,13 @@ every face, and why that never changes the answer, is in
 import numpy as np
 
 from ._collection import Collection
-from ._validate import frozen, frozen_float64, require_finite
+from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .results import MeshResult, format_repr
-from .shapes import Triangle
+from .shapes import DEFAULT_METHOD, Triangle, keyword_only
+
+#: How :meth:`TriangleMesh.signed_distance` and :meth:`TriangleMesh.contains`
+#: tell inside from outside.
+SIGNS = ("pseudonormal", "winding")
 
 
 class TriangleMesh(Collection):
@@ -61,7 +65,7 @@ class TriangleMesh(Collection):
     3.0
     """
 
-    __slots__ = ("vertices", "faces", "broad_phase", "_tree")
+    __slots__ = ("vertices", "faces", "broad_phase", "_tree", "_signs")
     methods = Triangle.methods
     _has_circles = False
 
@@ -92,7 +96,7 @@ class TriangleMesh(Collection):
         params = np.zeros((len(f), 10))
         params[:, :9] = v[f].reshape(-1, 9)
         resolved, tree = self._tree_for(np.zeros(len(f), np.int8), params, broad_phase)
-        self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree)
+        self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None)
 
     def __repr__(self):
         return format_repr(self, ("vertices", "faces"), broad_phase=self.broad_phase)
@@ -105,6 +109,154 @@ class TriangleMesh(Collection):
     def triangles(self):
         """The faces' vertices, ``(F, 3, 3)``: a new array."""
         return self.vertices[self.faces]
+
+    def __getstate__(self):
+        state = super().__getstate__()
+        state["_signs"] = None  # rebuilt at first use: quicker than sending it
+        return state
+
+    def __setstate__(self, state):
+        super().__setstate__({"_signs": None, **state})
+
+    def signed_distance(self, points, *args, method=DEFAULT_METHOD, sign="pseudonormal"):
+        """Distance to the surface, negative inside the closed mesh, positive outside.
+
+        Parameters
+        ----------
+        points : array_like, shape ``(..., 3)``
+        method : str, keyword-only
+            The per-triangle method of the distance (see :attr:`methods`);
+            default ``"robust"``.
+        sign : {"pseudonormal", "winding"}, keyword-only
+            How inside is told from outside.  ``"pseudonormal"`` (default):
+            the angle-weighted pseudonormal of the closest face, edge or
+            vertex, O(1) per point after the closest point; for closed
+            meshes only.  ``"winding"``: the generalized winding number,
+            inside where it exceeds 1/2, for any mesh (open, non-manifold,
+            self-intersecting), at O(F) per point.
+
+        Returns
+        -------
+        ndarray of float64, shape ``(...)``, read-only
+            ``+0.0`` where the distance is 0 (never ``-0.0``); NaN where the
+            point is not finite.  A NumPy scalar for one point.
+
+        Raises
+        ------
+        ValueError
+            With ``sign="pseudonormal"``, if the mesh is not closed: the
+            message names an edge that is not shared by exactly two faces
+            running it in opposite directions.
+
+        Notes
+        -----
+        Inside is the side the faces' normals point away from: faces are
+        ordered counterclockwise seen from outside, and a mesh whose faces
+        all point inwards gives inverted signs.
+
+        The pseudonormal test (Bærentzen and Aanæs, 2005) is exact in
+        theory on a closed, consistently oriented surface that does not
+        intersect itself, and needs nothing but the closest feature, which
+        the distance query finds anyway; it was chosen over the winding
+        number (Jacobson et al., 2013), which is also right on meshes with
+        small holes but costs O(F) per point without a hierarchy of far-field
+        approximations.  Closed means: every edge of the faces with three
+        distinct vertex indices is shared by exactly two faces that run it in
+        opposite directions; faces with a repeated vertex index are left out
+        of that check.  The pseudonormals are computed at the first call
+        and kept with the mesh (not pickled).
+
+        The winding number decides the points the pseudonormal cannot:
+        those within the bound of rounding errors of the closest feature's
+        tangent plane, and those whose closest feature touches a face of
+        zero area (whose normal is undefined).  Each such point costs O(F).
+        A point within rounding error of the surface may get either sign.
+
+        Examples
+        --------
+        A cube from -1 to 1, queried at its centre, outside a face, on a
+        vertex and beyond an edge:
+
+        >>> import numpy as np, proximity
+        >>> vertices = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+        >>> faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+        ...          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+        >>> cube = proximity.TriangleMesh(vertices, faces)
+        >>> cube.signed_distance([[0, 0, 0], [0, 0, 3], [1, 1, 1], [2, 2, 0]]).round(6).tolist()
+        [-1.0, 2.0, 0.0, 1.414214]
+        >>> cube.contains([[0.5, 0.5, 0.5], [0, 0, 1.5]]).tolist()
+        [True, False]
+        """
+        if args:
+            raise keyword_only(self, "signed_distance", args)
+        out_shape, distance, inside = self._signed(points, method, sign)
+        signed = np.where(inside, -distance, distance) + 0.0  # -0.0 + 0.0 is +0.0
+        return freeze_result(signed.reshape(out_shape))[()]
+
+    def contains(self, points, *args, method=DEFAULT_METHOD, sign="pseudonormal"):
+        """Whether each point is in the closed mesh: inside, or on the surface.
+
+        Parameters
+        ----------
+        points : array_like, shape ``(..., 3)``
+        method, sign : str, keyword-only
+            As in :meth:`signed_distance`.
+
+        Returns
+        -------
+        ndarray of bool, shape ``(...)``, read-only
+            True where :meth:`signed_distance` is ``<= 0``;
+            False where the point is not finite.
+
+        Raises
+        ------
+        ValueError
+            With ``sign="pseudonormal"``, if the mesh is not closed.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+        >>> tetrahedron = proximity.TriangleMesh(vertices, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> tetrahedron.contains([[0.1, 0.1, 0.1], [1, 1, 1], [0, 0, 0]]).tolist()
+        [True, False, True]
+        """
+        if args:
+            raise keyword_only(self, "contains", args)
+        out_shape, distance, inside = self._signed(points, method, sign)
+        return freeze_result((inside | (distance == 0)).reshape(out_shape))[()]
+
+    def _signed(self, points, method, sign):
+        """``(output shape, distances (n,), inside (n,))`` for :meth:`signed_distance`."""
+        if sign not in SIGNS:
+            raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
+        from . import _signed
+
+        signs = None
+        if sign == "pseudonormal":
+            signs = self._signs
+            if signs is None:
+                signs = _signed.Signs(self.vertices, self.faces)
+                object.__setattr__(self, "_signs", signs)  # a cache: the mesh does not change
+            if not signs.closed:
+                raise ValueError(
+                    f"signed distance with sign='pseudonormal' needs a closed mesh; this one is not: "
+                    f"{signs.reason}.  sign='winding' works on any mesh, at O(F) per point"
+                )
+        r = self.closest_point(points, method=method) if signs is not None else None
+        distance = np.asarray(r.distance if r is not None else self.distance(points, method=method))
+        out_shape = distance.shape
+        distance = distance.reshape(-1)
+        flat = as_float64(points, "points", "(..., 3)").reshape(-1, 3)
+        if signs is not None:
+            inside = _signed.inside(
+                signs, self.vertices, self.faces, flat, r.face.reshape(-1), r.feature.reshape(-1), distance
+            )
+        else:
+            inside = np.zeros(len(flat), dtype=bool)
+            rows = np.flatnonzero(distance > 0)
+            inside[rows] = _signed.winding_numbers(self.vertices, self.faces, flat[rows]) > 0.5
+        return out_shape, distance, inside
 
     def _result(self, fields):
         del fields["flag"]
