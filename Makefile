@@ -7,6 +7,7 @@ STAMP := $(VENV)/.installed
 CORE := .venv-core
 CORE_STAMP := $(CORE)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
+PEERS_STAMP := $(VENV)/.installed-peers
 
 .PHONY: test bench bench-quick docs clean clean-cache
 
@@ -17,6 +18,11 @@ $(BIN)/python:
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
 	touch $(STAMP)
+
+# The mesh benchmark's peers, for make bench only.
+$(PEERS_STAMP): pyproject.toml $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[peers]"
+	touch $(PEERS_STAMP)
 
 $(DOCS_STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[docs]"
@@ -42,13 +48,15 @@ test: $(STAMP)
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
 # is set, so every new process would compile the sources again (about 60 ms
 # of the start-up that the speed benchmark times).
-bench: $(STAMP) $(CORE_STAMP)
+bench: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --package-python $(CORE)/bin/python
+	$(BIN)/python -m benchmarks.meshes
 
-bench-quick: $(STAMP) $(CORE_STAMP)
+bench-quick: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
+	$(BIN)/python -m benchmarks.meshes --quick
 
 # The API reference, from the docstrings, into docs/_build/html; a warning
 # fails the build.
