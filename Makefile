@@ -15,7 +15,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
+	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters,scale]"
 	touch $(STAMP)
 
 $(DOCS_STAMP): pyproject.toml | $(BIN)/python
