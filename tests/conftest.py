@@ -9,7 +9,7 @@ def dask_client():
     each; made current only inside the tests that use it."""
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         with distributed.Client(cluster, set_as_default=False) as client:
             yield client
