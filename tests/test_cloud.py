@@ -163,7 +163,11 @@ def _bad(tmp_path, files):
     np.save(words, np.array([["a", "b", "c"]]))
     return {
         "missing mesh": ((tmp_path / "no.stl", files["npy"]), "MESH '.*no.stl' does not exist"),
-        "unreadable mesh": ((junk, files["npy"]), "cannot read MESH '.*junk.stl' as a mesh"),
+        "unreadable mesh": (
+            (junk, files["npy"]),
+            # As trimesh reads it: unreadable, or text that holds no face.
+            "cannot read MESH '.*junk.stl' as a mesh|MESH '.*junk.stl' holds no faces",
+        ),
         "no faces": ((empty, files["npy"]), "MESH '.*empty.obj' holds no faces"),
         "points as mesh": ((files["npy"], files["npy"]), "cannot read MESH '.*points.npy' as a mesh"),
         "missing points": ((files["stl"], tmp_path / "no.npy"), "POINTS '.*no.npy' does not exist"),
