@@ -62,7 +62,7 @@ def _zarr():
     try:
         import zarr
     except ImportError:
-        raise InputError(f"zarr arrays need zarr: {INSTALL}") from None
+        raise InputError(f"zarr arrays need zarr 3 (on Python 3.11 or later): {INSTALL}") from None
     return zarr
 
 
