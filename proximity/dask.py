@@ -13,14 +13,16 @@ a reference to it; otherwise it is one node of the graph that every task
 depends on.
 
 Threads.  Inside a task, the query runs on ``threads`` of Numba's threads
-(:func:`proximity.threads`).  By default, on a distributed worker, that is
-the machine's cores divided by the tasks that can run on it at once (the
-threads of all the workers on the same host), at least one, so that
-workers x threads x Numba's threads stays within the cores; under the
-threaded scheduler of one process, every thread, because concurrent
-queries share Numba's one pool of TBB threads instead of each starting
-their own (with Numba's OpenMP layer, set ``threads`` to the cores divided
-by Dask's threads).
+(:func:`proximity.threads`); the queries of a process's Dask threads run at
+the same time (the parallel kernels release the GIL).  By default, on a
+distributed worker, ``threads`` is the machine's cores divided by the tasks
+that can run on it at once (the threads of all the workers on the same
+host), at least one, so that workers x threads x Numba's threads stays
+within the cores.  Under the threaded scheduler of one process it is every
+thread: TBB, Numba's threading layer here, caps its worker threads for the
+whole process, and concurrent queries share them.  With Dask's
+``processes`` scheduler, or with Numba's OpenMP layer, pass ``threads``:
+the cores divided by the tasks that run at once.
 
 Dask is imported when a function is called: ``pip install
 'proximity3d[scale]'`` installs it.
