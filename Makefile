@@ -16,7 +16,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters]"
+	$(BIN)/python -m pip install --quiet -e ".[test,bench,adapters,scale]"
 	touch $(STAMP)
 
 # The mesh benchmark's peers, for make bench only.
@@ -47,16 +47,20 @@ test: $(STAMP)
 # A regular install byte-compiles the package; an editable one leaves that to
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
 # is set, so every new process would compile the sources again (about 60 ms
-# of the start-up that the speed benchmark times).
+# of the start-up that the speed benchmark times).  The last step,
+# benchmarks.scale, writes 100 million points (2.4 GB) to a temporary folder
+# and deletes them at the end.
 bench: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes
+	$(BIN)/python -m benchmarks.scale
 
 bench-quick: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes --quick
+	$(BIN)/python -m benchmarks.scale --quick
 
 # The API reference, from the docstrings, into docs/_build/html; a warning
 # fails the build.

@@ -6,8 +6,10 @@ answer to the per-shape method.  The broad phase (:mod:`proximity.bvh`) is
 chosen once, at construction.
 """
 
+import numpy as np
+
 from . import _threads
-from ._validate import as_float64
+from ._validate import as_float64, frozen
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
 BROAD_PHASES = ("auto", "brute", "bvh")
@@ -23,7 +25,8 @@ class Collection(Frozen):
     """What meshes and scenes share: validation, broad phase and the query.
 
     Subclasses set ``_tree`` (the broad phase of :mod:`proximity.bvh`),
-    ``methods`` and ``_has_circles``, and implement ``_result``.
+    ``methods`` and ``_has_circles``, and implement ``_result`` and
+    ``_primitives``.
     """
 
     __slots__ = ()
@@ -42,6 +45,64 @@ class Collection(Frozen):
 
             tree = bvh.build(kinds, params) if broad_phase == "bvh" else bvh.brute(kinds, params)
         return broad_phase, tree
+
+    # Pickling.  The tree's primitive data are copies of the collection's own
+    # arrays, and its primitives' boxes and slabs follow from them row by row
+    # (:func:`proximity.bvh.primitive_cull`, NumPy alone), so a pickle holds
+    # only what the build decided: which primitives, in which order, the
+    # nodes and their bounds.  Unpickling builds no hierarchy and compiles
+    # nothing, and the pickle is little more than the collection's own data.
+
+    def __getstate__(self):
+        state = super().__getstate__()
+        tree = state.pop("_tree")
+        state["_hierarchy"] = {
+            "index": tree.index,
+            "child": tree.child,
+            "count": tree.count,
+            "bounds": tree.bounds,
+            # The loose bounds are the tight ones unless the collection holds circles.
+            "loose_bounds": None if tree.loose_cull is tree.cull else tree.loose_bounds,
+            "depth": tree.depth,
+        }
+        return state
+
+    def __setstate__(self, state):
+        state = dict(state)
+        hierarchy = state.pop("_hierarchy", None)
+        super().__setstate__(state)
+        if hierarchy is not None:  # else the state holds the tree itself
+            object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
+
+    def _restore_tree(self, hierarchy):
+        from . import bvh
+
+        def read_only(array, dtype):
+            return frozen(np.ascontiguousarray(array, dtype=dtype), dtype=dtype, new=True)
+
+        index = read_only(hierarchy["index"], np.int64)
+        kinds, params = self._primitives(index)
+        kinds, params = read_only(kinds, np.int8), read_only(params, np.float64)
+        tight, loose = bvh.primitive_cull(kinds, params)
+        bounds = read_only(hierarchy["bounds"], np.float64)
+        loose_bounds = hierarchy["loose_bounds"]
+        cull = read_only(tight, np.float64)
+        if loose_bounds is None:
+            loose_bounds, loose_cull = bounds, cull
+        else:
+            loose_bounds, loose_cull = read_only(loose_bounds, np.float64), read_only(loose, np.float64)
+        return bvh.Tree(
+            kinds=kinds,
+            params=params,
+            index=index,
+            child=read_only(hierarchy["child"], np.int64),
+            count=read_only(hierarchy["count"], np.int64),
+            bounds=bounds,
+            cull=cull,
+            loose_bounds=loose_bounds,
+            loose_cull=loose_cull,
+            depth=int(hierarchy["depth"]),
+        )
 
     def _query(self, points, method, full):
         method = check_method(method, self.methods)

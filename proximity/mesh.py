@@ -93,9 +93,7 @@ class TriangleMesh(Collection):
                 f"faces must index vertices, 0 <= index < {len(v)}; got {int(f[index])} at index {index}"
             )
         f = frozen(f, dtype=np.int64, new=f is not faces and f.dtype == np.int64)
-        params = np.zeros((len(f), 10))
-        params[:, :9] = v[f].reshape(-1, 9)
-        resolved, tree = self._tree_for(np.zeros(len(f), np.int8), params, broad_phase)
+        resolved, tree = self._tree_for(*_primitives(v, f), broad_phase)
         self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None)
 
     def __repr__(self):
@@ -258,8 +256,19 @@ class TriangleMesh(Collection):
             inside[rows] = _signed.winding_numbers(self.vertices, self.faces, flat[rows]) > 0.5
         return out_shape, distance, inside
 
+    def _primitives(self, index):
+        """``(kinds, params)`` of faces ``index``, as the tree stores them."""
+        return _primitives(self.vertices, self.faces[index])
+
     def _result(self, fields):
         del fields["flag"]
         barycentric = fields.pop("extra")
         face = fields.pop("index")
         return MeshResult(**fields, barycentric=barycentric, face=face)
+
+
+def _primitives(vertices, faces):
+    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
+    params = np.zeros((len(faces), 10))
+    params[:, :9] = vertices[faces].reshape(-1, 9)
+    return np.zeros(len(faces), np.int8), params

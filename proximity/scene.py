@@ -78,42 +78,9 @@ class Scene(Collection):
                 "shapes must be a list or tuple of Triangle, Disk, Circle or TriangleMesh; "
                 f"got {type(shapes).__name__}"
             )
-        kinds, params, counts = [], [], []
-        methods = None
-        for j, shape in enumerate(shapes):
-            if isinstance(shape, Triangle):
-                v = shape._vertices3.reshape(-1, 9)
-                kind = np.zeros(len(v), np.int8)
-                p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
-            elif isinstance(shape, TriangleMesh):
-                v = shape.triangles.reshape(-1, 9)
-                kind = np.zeros(len(v), np.int8)
-                p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
-            elif isinstance(shape, (Disk, Circle)):
-                batch = shape.batch_shape
-                c = np.broadcast_to(shape.center, batch + (3,)).reshape(-1, 3)
-                u = np.broadcast_to(shape._unit_normal, batch + (3,)).reshape(-1, 3)
-                n = np.broadcast_to(shape.normal, batch + (3,)).reshape(-1, 3)
-                r = np.broadcast_to(shape.radius, batch).reshape(-1, 1)
-                code = 1 if isinstance(shape, Disk) else 2
-                kind = np.full(len(c), code, np.int8)
-                p = np.concatenate([c, u, n, r], axis=1)
-            else:
-                raise TypeError(
-                    f"shapes[{j}] must be a Triangle, Disk, Circle or TriangleMesh; "
-                    f"got {type(shape).__name__}"
-                )
-            if len(kind):
-                methods = (
-                    shape.methods if methods is None else tuple(m for m in methods if m in shape.methods)
-                )
-            kinds.append(kind)
-            params.append(p)
-            counts.append(len(kind))
+        kinds, params, counts, methods = _primitives(shapes)
         if sum(counts) == 0:
             raise ValueError(f"shapes must hold at least one primitive; got {len(shapes)} shapes with none")
-        kinds = np.concatenate(kinds)
-        params = np.concatenate(params)
         resolved, tree = self._tree_for(kinds, params, broad_phase)
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         offsets.flags.writeable = False
@@ -136,6 +103,11 @@ class Scene(Collection):
         if len(self.shapes) > 4:
             shapes += f", ... ({len(self.shapes) - 4} more)"
         return f"Scene([{shapes}], broad_phase={self.broad_phase!r})"
+
+    def _primitives(self, index):
+        """``(kinds, params)`` of primitives ``index``, as the tree stores them."""
+        kinds, params, _, _ = _primitives(self.shapes)
+        return kinds[index], params[index]
 
     def _result(self, fields):
         index = fields.pop("index")
@@ -162,3 +134,41 @@ def _summary(shape):
     if isinstance(shape, Collection):
         return f"<{type(shape).__name__} of {len(shape)} faces>"
     return f"<{type(shape).__name__} batch_shape={shape.batch_shape}>"
+
+
+def _primitives(shapes):
+    """``(kinds, params, counts, methods)``: every primitive of ``shapes`` in
+    order, as the broad phase stores them, the number from each shape, and
+    the methods they all offer."""
+    kinds, params, counts = [], [], []
+    methods = None
+    for j, shape in enumerate(shapes):
+        if isinstance(shape, Triangle):
+            v = shape._vertices3.reshape(-1, 9)
+            kind = np.zeros(len(v), np.int8)
+            p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
+        elif isinstance(shape, TriangleMesh):
+            v = shape.triangles.reshape(-1, 9)
+            kind = np.zeros(len(v), np.int8)
+            p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
+        elif isinstance(shape, (Disk, Circle)):
+            batch = shape.batch_shape
+            c = np.broadcast_to(shape.center, batch + (3,)).reshape(-1, 3)
+            u = np.broadcast_to(shape._unit_normal, batch + (3,)).reshape(-1, 3)
+            n = np.broadcast_to(shape.normal, batch + (3,)).reshape(-1, 3)
+            r = np.broadcast_to(shape.radius, batch).reshape(-1, 1)
+            code = 1 if isinstance(shape, Disk) else 2
+            kind = np.full(len(c), code, np.int8)
+            p = np.concatenate([c, u, n, r], axis=1)
+        else:
+            raise TypeError(
+                f"shapes[{j}] must be a Triangle, Disk, Circle or TriangleMesh; got {type(shape).__name__}"
+            )
+        if len(kind):
+            methods = shape.methods if methods is None else tuple(m for m in methods if m in shape.methods)
+        kinds.append(kind)
+        params.append(p)
+        counts.append(len(kind))
+    if not counts:
+        return np.zeros(0, np.int8), np.zeros((0, 10)), counts, methods
+    return np.concatenate(kinds), np.concatenate(params), counts, methods

@@ -137,12 +137,17 @@ class Frozen:
         for cls in type(self).__mro__:
             yield from cls.__dict__.get("__slots__", ())
 
+    # Attributes computed from the others (by ``_derive``), left out of pickles.
+    _derived = ()
+
     def __getstate__(self):
-        return {name: getattr(self, name) for name in self._slots()}
+        return {name: getattr(self, name) for name in self._slots() if name not in self._derived}
 
     def __setstate__(self, state):
         # Arrays come back from a pickle writeable: make them read-only again.
         self._init(**freeze_fields(state))
+        if self._derived:
+            self._init(**self._derive())
 
     def __copy__(self):
         return self  # immutable
@@ -287,6 +292,7 @@ class Triangle(_Facade):
     """
 
     __slots__ = ("vertices", "batch_shape", "dim", "_vertices3", "_args")
+    _derived = ("_vertices3", "_args")
     _result = TriangleResult
     _from_row = staticmethod(triangle_from_row)
 
@@ -296,15 +302,13 @@ class Triangle(_Facade):
         if v.ndim < 2 or v.shape[-2] != 3 or v.shape[-1] not in (2, 3):
             raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
         require_finite(v, "vertices")
+        self._init(vertices=v, batch_shape=v.shape[:-2], dim=v.shape[-1])
+        self._init(**self._derive())
+
+    def _derive(self):
+        v = self.vertices
         v3 = v if v.shape[-1] == 3 else frozen(_to_3d(v), new=True)
-        single = v.shape == (3, 3)
-        self._init(
-            vertices=v,
-            batch_shape=v.shape[:-2],
-            dim=v.shape[-1],
-            _vertices3=v3,
-            _args=v3.ravel() if single else None,
-        )
+        return {"_vertices3": v3, "_args": v3.ravel() if v.shape == (3, 3) else None}
 
     _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
 
@@ -325,6 +329,7 @@ class Triangle(_Facade):
 
 class _Round(_Facade):
     __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal", "_args")
+    _derived = ("_args",)
     dim = 3
     _is_disk = False
 
@@ -355,18 +360,15 @@ class _Round(_Facade):
             [("center", c.shape[:-1]), ("normal", n.shape[:-1]), ("radius", r.shape)],
             "the batch dimensions of center, normal and radius",
         )
-        u = _unit(n)
+        self._init(center=c, normal=n, radius=r, batch_shape=batch, _unit_normal=frozen(_unit(n), new=True))
+        self._init(**self._derive())
+
+    def _derive(self):
         args = None
-        if batch == ():
+        if self.batch_shape == ():
+            c, u, n, r = self.center, self._unit_normal, self.normal, self.radius
             args = frozen(np.concatenate([[float(self._is_disk)], c, u, n, [r]]), new=True)
-        self._init(
-            center=c,
-            normal=n,
-            radius=r,
-            batch_shape=batch,
-            _unit_normal=frozen(u, new=True),
-            _args=args,
-        )
+        return {"_args": args}
 
     def __repr__(self):
         return format_repr(self, ("center", "normal", "radius"))

@@ -326,10 +326,11 @@ def test_shapes_pickle_copy_and_deepcopy(kind, monkeypatch):
         _same(expected, other.closest_point(points))
         for method in shape.methods:
             assert (other.distance(points, method=method) == shape.distance(points, method=method)).all()
-        for name in shape.__getstate__():
+        for name in other._slots():
             value = getattr(other, name)
-            if isinstance(value, np.ndarray):
-                assert not value.flags.writeable
+            for array in vars(value).values() if name == "_tree" else [value]:
+                if isinstance(array, np.ndarray):
+                    assert not array.flags.writeable
         with pytest.raises(AttributeError, match="immutable"):
             other.dim = 2
 

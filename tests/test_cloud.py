@@ -1,0 +1,287 @@
+"""python -m proximity.cloud: distances from a point file to a mesh file,
+chunk by chunk, in this process or on Dask, equal bit for bit to the
+in-memory query; bad input named; no complete-looking output from a job
+that stopped."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+from proximity import cloud  # noqa: E402
+
+N = 20_000
+CHUNK = "3000"  # does not divide N
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cloud")
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    paths = {}
+    for suffix in ("stl", "obj", "ply"):
+        paths[suffix] = folder / f"sphere.{suffix}"
+        sphere.export(paths[suffix])
+    points = np.random.default_rng(0).normal(size=(N, 3)) * 1.3
+    points[[5, 17, 9000]] = [[np.nan, 0, 0], [0, np.inf, 0], [np.nan, np.nan, np.nan]]
+    paths["npy"] = folder / "points.npy"
+    np.save(paths["npy"], points)
+    paths["points"] = points
+    return paths
+
+
+def _run(*args):
+    return cloud.main([str(a) for a in args])
+
+
+def _expected(mesh_path, points):
+    return cloud.read_mesh(mesh_path).closest_point(points)
+
+
+@pytest.mark.parametrize("mesh", ["stl", "obj", "ply"])
+def test_distances_of_an_npy_cloud_equal_the_in_memory_query(files, mesh, tmp_path, capsys):
+    out = tmp_path / "d.npy"
+    assert _run(files[mesh], files["npy"], "-o", out, "--chunk", CHUNK) == 0
+    got = np.load(out)
+    expected = _expected(files[mesh], files["points"]).distance
+    assert got.dtype == np.float64 and got.tobytes() == expected.tobytes()
+    assert not os.path.exists(str(out) + ".partial")
+    err = capsys.readouterr().err
+    # Quiet when stderr is not a terminal, but for the warning about the three bad rows.
+    assert err.strip() == (
+        f"proximity.cloud: warning: 3 of 20,000 rows of POINTS {str(files['npy'])!r} hold NaN or inf: "
+        "their distances are NaN"
+    )
+    assert np.isnan(got[[5, 17, 9000]]).all() and np.isfinite(np.delete(got, [5, 17, 9000])).all()
+
+
+def test_closest_points_and_faces_as_records(files, tmp_path):
+    out = tmp_path / "r.npy"
+    args = ["--closest-points", "--faces", "--method", "certified", "--chunk", CHUNK]
+    assert _run(files["obj"], files["npy"], "-o", out, *args) == 0
+    got = np.load(out, mmap_mode="r")
+    assert got.dtype.names == ("distance", "point", "face") and got.shape == (N,)
+    expected = cloud.read_mesh(files["obj"]).closest_point(files["points"], method="certified")
+    for name in got.dtype.names:
+        assert np.ascontiguousarray(got[name]).tobytes() == getattr(expected, name).tobytes(), name
+    assert _run(files["obj"], files["npy"], "-o", out, "--faces") == 0
+    assert np.load(out).dtype.names == ("distance", "face")
+
+
+def _ply(path, points):
+    """A binary PLY file of ``points`` with double-precision coordinates."""
+    header = f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\n"
+    header += "".join(f"property double {axis}\n" for axis in "xyz") + "end_header\n"
+    path.write_bytes(header.encode() + np.ascontiguousarray(points, "<f8").tobytes())
+
+
+def test_ply_points(files, tmp_path):
+    finite = files["points"][np.isfinite(files["points"]).all(axis=1)][:5000]
+    ply, single = tmp_path / "points.ply", tmp_path / "single.ply"
+    _ply(ply, finite)
+    trimesh.PointCloud(finite).export(single)  # float coordinates
+    assert cloud.Points(ply)[:].tobytes() == finite.tobytes()  # read back exactly
+    assert cloud.Points(single)[:].tobytes() == finite.astype(np.float32).astype(np.float64).tobytes()
+    for path in (ply, single):
+        out = tmp_path / "d.npy"
+        assert _run(files["stl"], path, "-o", out, "--chunk", "999") == 0
+        expected = _expected(files["stl"], cloud.Points(path)[:]).distance
+        assert np.load(out).tobytes() == expected.tobytes()
+
+
+def test_zarr_points_in_and_zarr_arrays_out(files, tmp_path):
+    zarr = pytest.importorskip("zarr")
+    source = tmp_path / "points.zarr"
+    z = zarr.open_array(str(source), mode="w", shape=(N, 3), chunks=(4096, 3), dtype="f8")
+    z[:] = files["points"]
+    out = tmp_path / "d.zarr"
+    assert _run(files["ply"], source, "-o", out, "--faces", "--closest-points", "--chunk", CHUNK) == 0
+    group = zarr.open_group(str(out), mode="r")
+    expected = _expected(files["ply"], files["points"])
+    assert sorted(group.array_keys()) == ["distance", "face", "point"]
+    for name in ("distance", "point", "face"):
+        assert group[name].chunks[0] == int(CHUNK)
+        assert group[name][:].tobytes() == getattr(expected, name).tobytes(), name
+
+
+def test_a_dask_cluster_at_an_address_writes_the_same_bits(files, tmp_path, dask_client):
+    out, summary = tmp_path / "d.npy", tmp_path / "summary.json"
+    address = dask_client.scheduler.address
+    args = ["--scheduler", address, "--chunk", CHUNK, "--faces", "--summary", summary]
+    assert _run(files["stl"], files["npy"], "-o", out, *args) == 0
+    expected = _expected(files["stl"], files["points"])
+    got = np.load(out)
+    assert got["distance"].tobytes() == expected.distance.tobytes()
+    assert got["face"].tobytes() == expected.face.tobytes()
+    report = json.loads(summary.read_text())
+    assert report["points"] == N and report["nan_rows"] == 3 and report["where"] == address
+
+
+def test_workers_start_a_local_cluster_and_report_their_peak_memory(files, tmp_path):
+    out, summary = tmp_path / "d.zarr", tmp_path / "summary.json"
+    pytest.importorskip("zarr")
+    args = ["--workers", "2", "--chunk", CHUNK, "--summary", summary]
+    assert _run(files["stl"], files["npy"], "-o", out, *args) == 0
+    import zarr
+
+    expected = _expected(files["stl"], files["points"]).distance
+    assert zarr.open_group(str(out), mode="r")["distance"][:].tobytes() == expected.tobytes()
+    peaks = json.loads(summary.read_text())["peak_rss_bytes"]
+    assert len(peaks["workers"]) == 2 and all(p > 0 for p in peaks["workers"].values())
+
+
+def test_progress_on_request(files, tmp_path, capsys):
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--progress") == 0
+    err = capsys.readouterr().err
+    assert "proximity.cloud" in err and "20.0k/20.0k" in err
+
+
+def test_progress_without_tqdm_is_a_line(files, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "tqdm", None)
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--progress", "--chunk", CHUNK) == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[-2].startswith("proximity.cloud: 20,000/20,000 points (100%,")
+
+
+# --- Bad input ----------------------------------------------------------------------------------
+
+
+def _bad(tmp_path, files):
+    junk = tmp_path / "junk.stl"
+    junk.write_bytes(bytes(range(256)) * 20)
+    empty = tmp_path / "empty.obj"
+    empty.write_text("# nothing\n")
+    narrow, words = tmp_path / "narrow.npy", tmp_path / "words.npy"
+    np.save(narrow, np.zeros((10, 2)))
+    np.save(words, np.array([["a", "b", "c"]]))
+    return {
+        "missing mesh": ((tmp_path / "no.stl", files["npy"]), "MESH '.*no.stl' does not exist"),
+        "unreadable mesh": (
+            (junk, files["npy"]),
+            # As trimesh reads it: unreadable, or text that holds no face.
+            "cannot read MESH '.*junk.stl' as a mesh|MESH '.*junk.stl' holds no faces",
+        ),
+        "no faces": ((empty, files["npy"]), "MESH '.*empty.obj' holds no faces"),
+        "points as mesh": ((files["npy"], files["npy"]), "cannot read MESH '.*points.npy' as a mesh"),
+        "missing points": ((files["stl"], tmp_path / "no.npy"), "POINTS '.*no.npy' does not exist"),
+        "wrong width": (
+            (files["stl"], narrow),
+            r"POINTS .*narrow.npy. must have shape \(N, 3\); got shape \(10, 2\)",
+        ),
+        "not numbers": ((files["stl"], words), "POINTS '.*words.npy' must hold numbers; got dtype <U1"),
+        "unknown points": (
+            (files["stl"], junk),
+            "POINTS '.*junk.stl': expected a .npy or .ply file or a zarr",
+        ),
+    }
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["missing mesh", "unreadable mesh", "no faces", "points as mesh", "missing points", "wrong width",
+     "not numbers", "unknown points"],
+)  # fmt: skip
+def test_bad_input_is_named_and_writes_nothing(files, tmp_path, capsys, case):
+    (mesh, points), message = _bad(tmp_path, files)[case]
+    out = tmp_path / "d.npy"
+    assert _run(mesh, points, "-o", out) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("proximity.cloud: error: ")
+    assert __import__("re").search(message, err), err
+    assert not out.exists() and not (tmp_path / "d.npy.partial").exists()
+
+
+def test_bad_output_and_options(files, tmp_path, capsys):
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.txt") == 2
+    assert "OUT '" in capsys.readouterr().err
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "no" / "d.npy") == 2
+    assert "does not exist" in capsys.readouterr().err
+    for args in (["--chunk", "0"], ["--workers", "0"], ["--workers", "2", "--scheduler", "x"]):
+        with pytest.raises(SystemExit) as stop:
+            _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", *args)
+        assert stop.value.code == 2
+
+
+# --- A job that stops midway ---------------------------------------------------------------------
+
+
+def test_an_interrupted_job_leaves_the_previous_output_and_no_partial(files, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "d.npy"
+    np.save(out, np.arange(3.0))  # a previous run's complete output
+    query, calls = cloud._query, []
+
+    def interrupted(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return query(*args)
+
+    monkeypatch.setattr(cloud, "_query", interrupted)
+    assert _run(files["stl"], files["npy"], "-o", out, "--chunk", CHUNK) == 130
+    assert "interrupted; no output written" in capsys.readouterr().err
+    assert np.load(out).tolist() == [0.0, 1.0, 2.0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npy"]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_job_stopped_by_a_signal_leaves_no_complete_looking_output(files, tmp_path, signum):
+    # The process signals itself in the middle of the third chunk.
+    out = tmp_path / "d.npy"
+    code = textwrap.dedent(
+        f"""
+        import os, sys
+        from proximity import cloud
+        query, calls = cloud._query, []
+        def stopped(*args):
+            calls.append(1)
+            if len(calls) == 3:
+                os.kill(os.getpid(), {int(signum)})
+            return query(*args)
+        cloud._query = stopped
+        args = [{str(files["stl"])!r}, {str(files["npy"])!r}, "-o", {str(out)!r}, "--chunk", "3000"]
+        sys.exit(cloud.main(args))
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    names = sorted(p.name for p in tmp_path.iterdir())
+    if signum == signal.SIGTERM:
+        assert done.returncode == 128 + signum, done.stderr[-2000:]
+        assert names == []
+    else:
+        assert done.returncode == -signum
+        assert names == ["d.npy.partial"]  # never renamed: not mistaken for a result
+
+
+def test_the_module_runs_as_a_command(files, tmp_path):
+    out = tmp_path / "d.npy"
+    done = subprocess.run(
+        [sys.executable, "-m", "proximity.cloud", str(files["stl"]), str(files["npy"]), "-o", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "3 of 20,000 rows" in done.stderr
+    assert np.load(out).tobytes() == _expected(files["stl"], files["points"]).distance.tobytes()
+
+
+def test_the_scale_benchmark_runs_and_deletes_its_files(tmp_path):
+    from benchmarks import scale
+
+    data = tmp_path / "data"
+    data.mkdir()
+    args = ["--quick", "--points", "30000", "--chunk", "7000", "--dir", str(data), "--out", str(tmp_path)]
+    assert scale.main(args) == 0
+    assert list(data.iterdir()) == []
+    raw = json.loads((tmp_path / "scale.json").read_text())
+    assert raw["unpickle_builds"] == 0 and raw["faces"] == 20_480
+    runs = raw["runs"]
+    assert [r["points"] for r in runs.values()] == [30_000, 30_000, 3_000]
+    assert len(runs["command, LocalCluster(2)"]["peak_rss_bytes"]["workers"]) == 2
+    table = (tmp_path / "scale.md").read_text().splitlines()
+    assert sum(line.startswith("| command") for line in table) == 3
