@@ -228,11 +228,9 @@ def fcl_loop(vertices, faces, points):
     model is built here, outside what the function does."""
     import fcl
 
-    model = fcl.BVHModel()
-    model.beginModel(len(vertices), len(faces))
-    model.addSubModel(np.ascontiguousarray(vertices), np.ascontiguousarray(faces))
-    model.endModel()
-    mesh = fcl.CollisionObject(model, fcl.Transform())
+    from benchmarks.peers import FCL
+
+    mesh = FCL().build(vertices, faces)
     probe = fcl.CollisionObject(fcl.Sphere(0.0), fcl.Transform())
     request = fcl.DistanceRequest(enable_nearest_points=True)
 

@@ -97,7 +97,6 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
 NONE = int(Feature.NONE)
 
-_C1F = types.Array(types.float64, 1, "C", readonly=True)
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
 _C1B = types.Array(types.int8, 1, "C", readonly=True)
