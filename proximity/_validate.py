@@ -30,17 +30,24 @@ def as_float64(value, name, expected):
     return np.asarray(_real(value, name, expected), dtype=np.float64)
 
 
-def frozen_float64(value, name, expected):
+def frozen_float64(value, name, expected, copy=True):
     """:func:`as_float64` and :func:`frozen` in one, copying the data at most once.
 
     A list, or an array of another dtype, is converted into a new array,
     which is then the only copy; a float64 array is passed to :func:`frozen`.
+    With ``copy=False``, a C-contiguous float64 array is not copied even
+    where it is writeable: the result is a read-only view of the caller's
+    memory, which the caller promises not to write to.
     """
     array = _real(value, name, expected)
     if array.dtype != np.float64:
         return frozen(array.astype(np.float64, order="C"), new=True)
     if isinstance(value, (list, tuple)):
         return frozen(array, new=array.flags.c_contiguous)
+    if not copy and array.flags.c_contiguous:
+        view = array.view()
+        view.flags.writeable = False
+        return view
     return frozen(array)
 
 

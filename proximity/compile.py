@@ -66,6 +66,14 @@ def _winding():
     _signed.winding_numbers(mesh.vertices, mesh.faces, np.zeros((1, 3)))
 
 
+def _round_frames():
+    """The unit normals and checks of large batches of circles and disks."""
+    from . import point_disk
+
+    one = np.ones((1, 3))
+    point_disk.round_frames(one, one, np.ones(1), np.empty((1, 3)))
+
+
 def compile_all(methods=None, log=sys.stdout):
     """Compile the kernels of ``methods`` (default: every method) and of the broad phase.
 
@@ -85,6 +93,7 @@ def compile_all(methods=None, log=sys.stdout):
     jobs = [job for name in names for job in _jobs(name)]
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
     jobs.append(("mesh: winding number of the signed distance", _winding))
+    jobs.append(("circles and disks: unit normals of large batches", _round_frames))
     done = {}
     for k, (description, job) in enumerate(jobs, 1):
         start = time.perf_counter()

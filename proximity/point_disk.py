@@ -19,7 +19,7 @@ from numba.core import types
 
 from . import _exact, _pool, certified, methods
 from ._fp import UNSCALED, unscale
-from ._jit import inline, part, specialize
+from ._jit import inline, kernel, part, specialize
 from ._loops import (
     A_IN2,
     A_IN3,
@@ -379,3 +379,40 @@ def query(method, is_disk, center, unit_normal, normal, radius, points, out_shap
                 out["equidistant"][k], out["height"][k], out["radial"][k] = res[6:9]
         certified.count(n, len(rows))
     return out
+
+
+# |n| of a normal whose largest component lies in this range is computed
+# without scaling: no square then overflows, and none that underflows could
+# change the rounded sum, so the result has the bits of the scaled one.
+_NO_SCALING = (2.0**-400, 2.0**400)
+_LARGEST = np.finfo(np.float64).max
+
+
+@kernel(parallel=True)
+def round_frames(center, normal, radius, unit):
+    """``unit[i] = normal[i] / |normal[i]|`` for an ``(n, 3)`` normal array,
+    with the bits of ``shapes._unit``, and the number of rows with a problem:
+    a non-finite entry, a zero normal or a negative radius.  ``center`` and
+    ``radius`` are checked where they have ``n`` rows (else they have none).
+    A row with a problem has a meaningless ``unit`` row."""
+    bad = 0
+    check_center, check_radius = center.shape[0] > 0, radius.shape[0] > 0
+    for i in prange(normal.shape[0]):
+        x, y, z = normal[i, 0], normal[i, 1], normal[i, 2]
+        ax, ay, az = abs(x), abs(y), abs(z)
+        big = max(ax, ay, az)
+        ok = ax <= _LARGEST and ay <= _LARGEST and az <= _LARGEST and big > 0.0
+        if check_center:
+            ok = ok and abs(center[i, 0]) <= _LARGEST and abs(center[i, 1]) <= _LARGEST
+            ok = ok and abs(center[i, 2]) <= _LARGEST
+        if check_radius:
+            ok = ok and 0.0 <= radius[i] <= _LARGEST
+        if not ok:
+            bad += 1
+            big = 1.0
+        if not _NO_SCALING[0] <= big <= _NO_SCALING[1]:
+            e = -math.frexp(big)[1]
+            x, y, z = math.ldexp(x, e), math.ldexp(y, e), math.ldexp(z, e)
+        length = math.sqrt(x * x + y * y + z * z)
+        unit[i, 0], unit[i, 1], unit[i, 2] = x / length, y / length, z / length
+    return bad

@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import _counts, _threads
+from . import _counts, _pool, _threads
 from ._validate import (
     as_float64,
     broadcast_batch,
@@ -272,9 +272,11 @@ class Triangle(_Facade):
         The vertices ``V0, V1, V2`` of each triangle, finite, with D = 2 or 3.
         Degenerate triangles (collinear or coincident vertices) are valid:
         the ``robust`` method answers for the segment or point they are.
-        The triangle keeps its own read-only copy, so that it cannot change
-        behind its back; a C-contiguous float64 array that is read-only
-        already is used as it is, without a copy.
+    copy : bool, keyword-only, default False
+        A C-contiguous float64 array is used as it is, without a copy (the
+        triangle holds a read-only view of it), so do not write to it while
+        the triangle is in use; ``copy=True`` gives the triangle its own
+        copy.  Other input is converted into a new array in any case.
 
     Examples
     --------
@@ -296,9 +298,9 @@ class Triangle(_Facade):
     _result = TriangleResult
     _from_row = staticmethod(triangle_from_row)
 
-    def __init__(self, vertices):
+    def __init__(self, vertices, *, copy=False):
         expected = "(..., 3, D) with D = 2 or 3"
-        v = frozen_float64(vertices, "vertices", expected)
+        v = frozen_float64(vertices, "vertices", expected, copy)
         if v.ndim < 2 or v.shape[-2] != 3 or v.shape[-1] not in (2, 3):
             raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
         require_finite(v, "vertices")
@@ -341,26 +343,19 @@ class _Round(_Facade):
 
         return point_disk
 
-    def __init__(self, center, normal, radius):
-        c = frozen_float64(center, "center", "(..., 3)")
-        n = frozen_float64(normal, "normal", "(..., 3)")
-        r = frozen_float64(radius, "radius", "(...)")
+    def __init__(self, center, normal, radius, *, copy=False):
+        c = frozen_float64(center, "center", "(..., 3)", copy)
+        n = frozen_float64(normal, "normal", "(..., 3)", copy)
+        r = frozen_float64(radius, "radius", "(...)", copy)
         for name, a in (("center", c), ("normal", n)):
             if a.ndim == 0 or a.shape[-1] != 3:
                 raise ValueError(f"{name} must have shape (..., 3); got shape {a.shape}")
-        for name, a in (("center", c), ("normal", n), ("radius", r)):
-            require_finite(a, name)
-        if (r < 0).any():
-            index = tuple(int(i) for i in np.argwhere(r < 0)[0])
-            raise ValueError(f"radius must be >= 0; got {r[index]} at index {index}")
-        if not np.any(n, axis=-1).all():
-            index = tuple(int(i) for i in np.argwhere(~np.any(n, axis=-1))[0])
-            raise ValueError(f"normal must be non-zero; got a zero vector at index {index}")
+        unit = _unit_normals(c, n, r)
         batch = broadcast_batch(
             [("center", c.shape[:-1]), ("normal", n.shape[:-1]), ("radius", r.shape)],
             "the batch dimensions of center, normal and radius",
         )
-        self._init(center=c, normal=n, radius=r, batch_shape=batch, _unit_normal=frozen(_unit(n), new=True))
+        self._init(center=c, normal=n, radius=r, batch_shape=batch, _unit_normal=frozen(unit, new=True))
         self._init(**self._derive())
 
     def _derive(self):
@@ -403,6 +398,11 @@ class Circle(_Round):
         direction matters, and its sign orients ``height``.
     radius : array_like, shape ``batch``
         Radius, >= 0.  The batch dimensions of the three broadcast.
+    copy : bool, keyword-only, default False
+        C-contiguous float64 arrays are used as they are, without a copy
+        (the shape holds read-only views of them), so do not write to them
+        while the shape is in use; ``copy=True`` gives the shape its own
+        copies.
 
     Notes
     -----
@@ -452,6 +452,43 @@ def _to_3d(array):
     if array.shape[-1] == 3:
         return array
     return np.concatenate([array, np.zeros(array.shape[:-1] + (1,))], axis=-1)
+
+
+# From this many normals on, a compiled loop computes the unit normals.
+_COMPILED_UNIT = 1 << 16
+
+
+def _unit_normals(center, normal, radius):
+    """The unit normals of a circle or disk's arrays, or a ValueError naming
+    the first argument with a non-finite entry, a negative radius or a zero
+    normal."""
+    if normal.size >= 3 * _COMPILED_UNIT:
+        from .point_disk import round_frames
+
+        unit = _pool.empty(normal.shape)
+        rows = normal.size // 3
+        c = center.reshape(-1, 3) if center.size == normal.size else np.empty((0, 3))
+        r = radius.reshape(-1) if radius.size == rows else np.empty(0)
+        if round_frames(c, normal.reshape(-1, 3), r, unit.reshape(-1, 3)) == 0:
+            if c.size == 0:
+                require_finite(center, "center")
+            if r.size == 0:
+                _check_radius(radius)
+            return unit
+    require_finite(center, "center")
+    require_finite(normal, "normal")
+    _check_radius(radius)
+    if not np.any(normal, axis=-1).all():
+        index = tuple(int(i) for i in np.argwhere(~np.any(normal, axis=-1))[0])
+        raise ValueError(f"normal must be non-zero; got a zero vector at index {index}")
+    return _unit(normal)
+
+
+def _check_radius(radius):
+    require_finite(radius, "radius")
+    if (radius < 0).any():
+        index = tuple(int(i) for i in np.argwhere(radius < 0)[0])
+        raise ValueError(f"radius must be >= 0; got {radius[index]} at index {index}")
 
 
 def _unit(normal):

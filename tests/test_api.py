@@ -199,8 +199,8 @@ def _peak(function, *args):
         tracemalloc.stop()
 
 
-@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int64])
-def test_triangle_construction_copies_its_input_at_most_once(dtype):
+@pytest.mark.parametrize("dtype", [np.float32, np.int64, ">f8"])
+def test_triangle_construction_converts_other_input_in_one_copy(dtype):
     vertices = (np.random.default_rng(1).normal(size=(100_000, 3, 3)) * 100).astype(dtype)
     size = vertices.size * 8  # bytes of the float64 copy
     tri, peak = _peak(Triangle, vertices)
@@ -209,15 +209,28 @@ def test_triangle_construction_copies_its_input_at_most_once(dtype):
     assert (tri.vertices == vertices).all()
 
 
-def test_read_only_float64_input_is_shared_not_copied():
+@pytest.mark.parametrize("writeable", [True, False])
+def test_c_contiguous_float64_input_is_viewed_not_copied(writeable):
     vertices = np.random.default_rng(2).normal(size=(50_000, 3, 3))
-    vertices.flags.writeable = False
+    vertices.flags.writeable = writeable
     tri, peak = _peak(Triangle, vertices)
     assert np.shares_memory(tri.vertices, vertices) and peak < 0.2 * vertices.nbytes
-    again = Triangle(tri.vertices)
-    assert np.shares_memory(again.vertices, tri.vertices)
-    writeable = np.ones((4, 3, 3))
-    assert not np.shares_memory(Triangle(writeable).vertices, writeable)
+    assert not tri.vertices.flags.writeable and vertices.flags.writeable == writeable
+    assert np.shares_memory(Triangle(tri.vertices).vertices, tri.vertices)
+    center, normal, radius = vertices[:, 0], vertices[:, 1].copy(), np.ones(50_000)
+    disk = Disk(center, normal, radius)
+    assert np.shares_memory(disk.normal, normal) and np.shares_memory(disk.radius, radius)
+    assert not np.shares_memory(disk.center, center)  # a strided view: copied once
+
+
+def test_copy_true_gives_the_shape_its_own_data():
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    tri = Triangle(vertices, copy=True)
+    circle = Circle(vertices[0], vertices[1] + 1, np.float64(1.0), copy=True)
+    expected = tri.distance([3.0, 2.0, 1.0]), circle.distance([3.0, 2.0, 1.0])
+    vertices[...] = 7.0
+    assert not np.shares_memory(tri.vertices, vertices)
+    assert (tri.distance([3.0, 2.0, 1.0]), circle.distance([3.0, 2.0, 1.0])) == expected
 
 
 def test_triangle_mesh_takes_a_trimesh_or_any_object_with_vertices_and_faces():

@@ -5,6 +5,7 @@ import pytest
 
 import proximity
 from proximity import Circle, Disk, Feature, Triangle
+from proximity import shapes as shapes_module
 from proximity.testing import scenes
 
 TRI = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
@@ -138,11 +139,9 @@ def test_non_finite_points_give_nan_rows_only(kind, method):
     assert np.isnan(shape.distance(points, method=method)[1:]).all()
 
 
-def test_shape_data_are_frozen_copies():
-    vertices = np.asarray(TRI)
+def test_shape_data_are_frozen():
+    vertices = np.array(TRI)
     tri = Triangle(vertices)
-    vertices[0, 0] = 5.0
-    assert tri.vertices[0, 0] == 0.0
     with pytest.raises(ValueError):
         tri.vertices[0, 0] = 1.0
     with pytest.raises(AttributeError):
@@ -286,3 +285,51 @@ def test_one_circle_or_disk_takes_the_same_bits_as_pairs(family, cls, method):
     pairs = repeated.closest_point(points, method=method)
     for name, value in vars(pairs).items():
         np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
+
+
+# From this many circles or disks on, a compiled loop checks the arrays and
+# computes the unit normals; it must raise the same errors and give the same bits.
+LARGE = shapes_module._COMPILED_UNIT
+
+
+@pytest.mark.parametrize(
+    "field, row, value, match",
+    [
+        ("center", 9, np.inf, r"center must be finite; got inf at index \(9, 2\)"),
+        ("normal", 9, np.nan, r"normal must be finite; got nan at index \(9, 2\)"),
+        ("radius", 9, np.nan, r"radius must be finite; got nan at index \(9,\)"),
+        ("radius", 9, -1.0, r"radius must be >= 0; got -1.0 at index \(9,\)"),
+        ("normal", 9, 0.0, r"normal must be non-zero; got a zero vector at index \(9,\)"),
+    ],
+)
+@pytest.mark.parametrize("broadcast", [False, True])
+def test_large_batches_raise_the_same_errors(field, row, value, match, broadcast):
+    n = LARGE + 5
+    data = {"center": np.zeros((n, 3)), "normal": np.ones((n, 3)), "radius": np.ones(n)}
+    if broadcast and field != "center":
+        data["center"] = np.zeros(3)  # checked apart from the compiled loop
+    if broadcast and field != "radius":
+        data["radius"] = np.float64(1.0)
+    if field == "radius":
+        data["radius"][row] = value
+    elif field == "normal" and value == 0.0:
+        data["normal"][row] = 0.0
+    else:
+        data[field][row, 2] = value
+    with pytest.raises(ValueError, match=match):
+        Disk(**data)
+
+
+def test_large_batches_have_the_unit_normals_of_small_ones():
+    rng = np.random.default_rng(11)
+    n = LARGE + 1000
+    # Exponents over the whole float range, and components far apart in size.
+    normal = (rng.random((n, 3)) - 0.5) * np.exp2(rng.integers(-1000, 1020, (n, 1)))
+    normal *= np.exp2(rng.integers(-60, 1, (n, 3)))
+    normal[::5, 1] = 0.0
+    normal[::7] = rng.random((len(normal[::7]), 3)) + 0.01
+    assert np.isfinite(normal).all() and normal.any(axis=1).all()
+    large = Circle(np.zeros((n, 3)), normal, np.ones(n))
+    assert np.array_equal(large._unit_normal.view(np.int64), shapes_module._unit(normal).view(np.int64))
+    for k in range(0, n, 997):
+        assert np.array_equal(large._unit_normal[k], Circle(np.zeros(3), normal[k], 1.0)._unit_normal)
