@@ -73,6 +73,7 @@ The traversal is compiled per method (:func:`kernel`): the method's
 triangle and disk queries are bound into it, and nothing else is compiled.
 """
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -109,9 +110,11 @@ _OUT_B = types.Array(types.boolean, 1, "C")
 
 # Bound per method by :func:`proximity._jit.specialize`: the method's query
 # of one triangle and of one disk or circle, the primitive evaluation built
-# on them, and whether the method has an exact fallback.
-TRIANGLE_QUERY = ROUND_QUERY = EVALUATE = None
+# on them, whether the method has an exact fallback, and whether the tree
+# may hold disks and circles (a mesh's kernel compiles triangles alone).
+TRIANGLE_QUERY = ROUND_QUERY = EVALUATE = INTERVAL = None
 EXACT_FALLBACK = False
+ROUNDS = True
 
 
 def _evaluate(kinds, q, k, px, py, pz):
@@ -120,19 +123,19 @@ def _evaluate(kinds, q, k, px, py, pz):
     ``a`` is the barycentric triple for a triangle, ``(height, radial, NaN)``
     for a disk or a circle.
     """
-    if kinds[k] == TRIANGLE:
-        st, d, sqr, x, y, z, f, b0, b1, b2 = TRIANGLE_QUERY(
-            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-        )
-        return st, d, sqr, x, y, z, f, b0, b1, b2, False
-    st, d, sqr, x, y, z, f, e, h, r = ROUND_QUERY(
-        kinds[k] == DISK, q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5],
-        q[k, 6], q[k, 7], q[k, 8], q[k, 9], px, py, pz,
-    )  # fmt: skip
-    return st, d, sqr, x, y, z, f, h, r, math.nan, e
+    if ROUNDS:
+        if kinds[k] != TRIANGLE:
+            st, d, sqr, x, y, z, f, e, h, r = ROUND_QUERY(
+                kinds[k] == DISK, q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5],
+                q[k, 6], q[k, 7], q[k, 8], q[k, 9], px, py, pz,
+            )  # fmt: skip
+            return st, d, sqr, x, y, z, f, h, r, math.nan, e
+    st, d, sqr, x, y, z, f, b0, b1, b2 = TRIANGLE_QUERY(
+        q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+    )
+    return st, d, sqr, x, y, z, f, b0, b1, b2, False
 
 
-@inline
 def _interval(kinds, q, k, px, py, pz):
     """Bounds ``(lo, hi)`` on the certified distance from the robust one.
 
@@ -141,15 +144,7 @@ def _interval(kinds, q, k, px, py, pz):
     the largest coordinate difference (``sqrt(3)`` and rounding), plus ``R``
     for a disk or a circle.
     """
-    if kinds[k] == TRIANGLE:
-        d = point_triangle.robust(
-            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-        )[0]
-        m = 0.0
-        for v in range(3):
-            m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
-        scale = 1.75 * m
-    else:
+    if ROUNDS and kinds[k] != TRIANGLE:
         d = point_disk.robust_query(
             kinds[k] == DISK,
             q[k, 0],
@@ -168,6 +163,14 @@ def _interval(kinds, q, k, px, py, pz):
         )[1]
         m = max(max(abs(q[k, 0] - px), abs(q[k, 1] - py)), abs(q[k, 2] - pz))
         scale = 1.75 * m + q[k, 9]
+    else:
+        d = point_triangle.robust(
+            q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+        )[0]
+        m = 0.0
+        for v in range(3):
+            m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
+        scale = 1.75 * m
     w = 16.0 * EPS * scale + 5e-324  # the bound's absolute term, for subnormal distances
     return d - w, d + w
 
@@ -317,7 +320,7 @@ def _nearest(
                             if EXACT_FALLBACK:
                                 if r[0] != certified.CERTAIN:
                                     certain = False
-                                    lo, hi = _interval(kinds, params, k, px, py, pz)
+                                    lo, hi = INTERVAL(kinds, params, k, px, py, pz)
                                     lowest = min(lowest, lo)
                                     upper = min(upper, hi)
                             if certain:
@@ -742,6 +745,11 @@ class Tree:
         """Number of nodes; 1 for brute force."""
         return len(self.child)
 
+    @functools.cached_property
+    def rounds(self):
+        """Whether any stored primitive is a disk or a circle."""
+        return bool((self.kinds != TRIANGLE).any())
+
     def boxes(self, loose):
         """``(node boxes, primitive culling data, magnitude)``, tight or loose."""
         bounds, cull = (self.loose_bounds, self.loose_cull) if loose else (self.bounds, self.cull)
@@ -962,22 +970,27 @@ def _visiting_order(points):
     return np.argsort(_morton(points), kind="stable")
 
 
-def query_kernel(method):
-    """The compiled traversal of ``method`` (a :class:`~proximity.methods.Method`)."""
+def query_kernel(method, rounds):
+    """The compiled traversal of ``method`` (a :class:`~proximity.methods.Method`),
+    for trees of triangles alone or (``rounds``) with disks and circles."""
     name = method.name
+    tag = name if rounds else f"{name}_triangles"
     evaluate = specialize(
         _evaluate,
-        name,
+        tag,
         role="inline",
         TRIANGLE_QUERY=point_triangle.KERNELS[name][0],
         ROUND_QUERY=point_disk.KERNELS[name][0],
+        ROUNDS=rounds,
     )
+    interval = specialize(_interval, "rounds" if rounds else "triangles", role="inline", ROUNDS=rounds)
     return specialize(
         _nearest,
-        name,
+        tag,
         _QUERY_SIGNATURE,
         parallel=True,
         EVALUATE=evaluate,
+        INTERVAL=interval,
         EXACT_FALLBACK=method.exact_fallback,
     )
 
@@ -1022,7 +1035,7 @@ def nearest(tree, method, points, full, loose=False):
     # a sphere is equidistant from every face), so blocks are handed out
     # one at a time rather than split evenly between threads up front.
     with numba.parallel_chunksize(1):
-        query_kernel(method)(
+        query_kernel(method, tree.rounds)(
             tree.kinds,
             tree.params,
             tree.index,

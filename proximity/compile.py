@@ -37,7 +37,8 @@ def _jobs(method):
         (f"disk: {name}, one point", lambda: single_entry(point_disk.single_kernel(m))),
         (f"disk: {name}, pairs", lambda: point_disk.batch_kernel(m, False)),
         (f"disk: {name}, many points against one shape", lambda: point_disk.batch_kernel(m, True)),
-        (f"mesh and scene: {name}", lambda: bvh.query_kernel(m)),
+        (f"mesh: {name}", lambda: bvh.query_kernel(m, False)),
+        (f"scene with disks or circles: {name}", lambda: bvh.query_kernel(m, True)),
     ]
     return jobs
 
