@@ -33,7 +33,12 @@ import threading
 import types
 import warnings
 
+from llvmlite import ir
 from numba import njit
+from numba.core import cgutils
+from numba.core import types as nb_types
+from numba.experimental.function_type import _get_wrapper_address
+from numba.extending import intrinsic
 from numba.misc.appdirs import user_cache_dir
 
 _OPTIONS = {"error_model": "numpy"}
@@ -125,7 +130,8 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
 
     ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"`` or
     ``"inline"`` (compiled into its callers, as :func:`part` and
-    :func:`inline`).
+    :func:`inline`), or ``"pointer"``: cached, and called from compiled code
+    through its address (see :func:`address` and :func:`function_at`).
 
     ``tag`` names the specialisation: it is part of the cached kernel's file
     name, so every distinct set of ``bindings`` of one ``func`` needs its own.
@@ -145,9 +151,48 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
             copy.__doc__ = func.__doc__
             copy.__module__ = func.__module__
             args = (signature,) if signature is not None else ()
-            if role != "kernel":
+            if role == "pointer":
+                kernel_ = njit(*args, cache=CACHE, no_cpython_wrapper=True, **_OPTIONS)(copy)
+            elif role != "kernel":
                 kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:
                 kernel_ = njit(*args, parallel=parallel, cache=CACHE, **_OPTIONS)(copy)
             _specialised[key] = kernel_
     return kernel_
+
+
+# A parallel loop compiles its body into a function of its own, and
+# optimises and compiles it again with every function it calls linked in.
+# A block function called through its address instead is compiled once, on
+# its own, and the loop that calls it compiles once for every method.
+
+
+def address(kernel_, signature):
+    """The address of the C entry point of ``kernel_`` (a ``"pointer"`` kernel,
+    see :func:`specialize`) for ``signature``: an int, which a kernel turns
+    back into a function with :func:`function_at`."""
+    return _get_wrapper_address(kernel_, signature)
+
+
+def function_at(signature):
+    """An intrinsic ``f(address)`` that gives, in compiled code, the function
+    of ``signature`` at ``address`` (from :func:`address`), to be called.
+
+    Passing the address as an int, rather than the function itself, keeps
+    the call from Python as cheap as with arrays and numbers alone.
+    """
+    function_type = nb_types.FunctionType(signature)
+
+    @intrinsic
+    def at(typingctx, address_):
+        def codegen(context, builder, sig, args):
+            fn = cgutils.create_struct_proxy(function_type)(context, builder)
+            null = ir.Constant(ir.IntType(8).as_pointer(), None)
+            fn.c_addr = builder.inttoptr(args[0], null.type)
+            fn.py_addr = null
+            fn.jit_addr = null
+            return fn._getvalue()
+
+        return function_type(nb_types.int64), codegen
+
+    return at

@@ -84,7 +84,7 @@ from numba.core import types
 
 from . import certified, methods, point_disk, point_triangle
 from ._fp import EPS
-from ._jit import inline, kernel, specialize
+from ._jit import address, function_at, inline, kernel, specialize
 from .results import Feature
 
 TRIANGLE = 0
@@ -214,7 +214,8 @@ def _scale(px, py, pz, magnitude):
     return math.ldexp(1.0, -max(math.frexp(m)[1], -1000))
 
 
-_QUERY_SIGNATURE = types.void(
+_BLOCK_SIGNATURE = types.void(
+    types.int64,
     _C1B,
     _C2F,
     _C1I,
@@ -236,9 +237,12 @@ _QUERY_SIGNATURE = types.void(
     _OUT1,
     types.boolean,
 )
+_QUERY_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
+_nearest_at = function_at(_BLOCK_SIGNATURE)
 
 
-def _nearest(
+def _nearest_block(
+    block,
     kinds,
     params,
     index,
@@ -260,7 +264,9 @@ def _nearest(
     undecided,
     full,
 ):
-    """Nearest primitive to each point; with ``full=False`` only ``dist`` and ``undecided`` are written.
+    """Nearest primitive to each point of ``block`` (points ``block * BLOCK``
+    on, in the sequence ``order``); with ``full=False`` only ``dist`` and
+    ``undecided`` are written.
 
     ``kinds``, ``params``, ``index`` (the caller's index of each stored
     primitive) and ``cull`` (its box and slab) are in leaf order.  Node
@@ -279,115 +285,168 @@ def _nearest(
     """
     n = points.shape[0]
     sentinel = index.shape[0]
-    for block in prange((n + BLOCK - 1) // BLOCK):
-        stack_node = np.empty(depth + 1, np.int64)
-        stack_sqr = np.empty(depth + 1)
-        # The previous point's nearest primitive, tried first: points are
-        # visited in spatial order, so it is close to the next point's, and
-        # the bound it gives prunes from the root down.
-        prev_k = -1
-        for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
-            i = order[j]
-            px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-            best = math.inf
-            best_index = sentinel
-            best_k = -1
-            upper = math.inf  # least upper bound of the undecided answers
-            lowest = math.inf  # least lower bound of the undecided answers
-            # The winner's answer, kept as found rather than computed again.
-            w_sqr, w_x, w_y, w_z, w_a0, w_a1, w_a2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-            w_feature = NONE
-            w_flag = False
-            if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-                s = _scale(px, py, pz, magnitude)
-                qx, qy, qz = px * s, py * s, pz * s
-                reach = math.inf  # scaled distance beyond which primitives are skipped
-                limit = math.inf  # its square, for the boxes
-                node = 0
-                sp = 0
-                seed = prev_k
-                while True:
-                    if seed >= 0:
-                        first, c = seed, 1
+    stack_node = np.empty(depth + 1, np.int64)
+    stack_sqr = np.empty(depth + 1)
+    # The previous point's nearest primitive, tried first: points are
+    # visited in spatial order, so it is close to the next point's, and
+    # the bound it gives prunes from the root down.
+    prev_k = -1
+    for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
+        i = order[j]
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        best = math.inf
+        best_index = sentinel
+        best_k = -1
+        upper = math.inf  # least upper bound of the undecided answers
+        lowest = math.inf  # least lower bound of the undecided answers
+        # The winner's answer, kept as found rather than computed again.
+        w_sqr, w_x, w_y, w_z, w_a0, w_a1, w_a2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        w_feature = NONE
+        w_flag = False
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            s = _scale(px, py, pz, magnitude)
+            qx, qy, qz = px * s, py * s, pz * s
+            reach = math.inf  # scaled distance beyond which primitives are skipped
+            limit = math.inf  # its square, for the boxes
+            node = 0
+            sp = 0
+            seed = prev_k
+            while True:
+                if seed >= 0:
+                    first, c = seed, 1
+                else:
+                    first, c = child[node], count[node]
+                if c > 0:
+                    for k in range(first, first + c):
+                        if _culled(cull, k, s, qx, qy, qz, reach):
+                            continue
+                        r = EVALUATE(kinds, params, k, px, py, pz)
+                        certain = True
+                        if EXACT_FALLBACK:
+                            if r[0] != certified.CERTAIN:
+                                certain = False
+                                lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                                lowest = min(lowest, lo)
+                                upper = min(upper, hi)
+                        if certain:
+                            d = r[1]
+                            idx = index[k]
+                            if d < best or (d == best and idx < best_index):
+                                best = d
+                                best_index = idx
+                                best_k = k
+                                w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                                w_feature = r[6]
+                                w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                                w_flag = r[10]
+                        reach = min(best, upper) * s + SLACK
+                        limit = reach * reach
+                    node = 0 if seed >= 0 else -1  # after the seed, the tree from its root
+                    seed = -1
+                else:
+                    left = child[node]
+                    right = left + 1
+                    dl = _bound_sqr(bounds, left, s, qx, qy, qz)
+                    dr = _bound_sqr(bounds, right, s, qx, qy, qz)
+                    if dr < dl:
+                        left, right, dl, dr = right, left, dr, dl
+                    if dl <= limit:
+                        if dr <= limit:
+                            stack_node[sp] = right
+                            stack_sqr[sp] = dr
+                            sp += 1
+                        node = left
                     else:
-                        first, c = child[node], count[node]
-                    if c > 0:
-                        for k in range(first, first + c):
-                            if _culled(cull, k, s, qx, qy, qz, reach):
-                                continue
-                            r = EVALUATE(kinds, params, k, px, py, pz)
-                            certain = True
-                            if EXACT_FALLBACK:
-                                if r[0] != certified.CERTAIN:
-                                    certain = False
-                                    lo, hi = INTERVAL(kinds, params, k, px, py, pz)
-                                    lowest = min(lowest, lo)
-                                    upper = min(upper, hi)
-                            if certain:
-                                d = r[1]
-                                idx = index[k]
-                                if d < best or (d == best and idx < best_index):
-                                    best = d
-                                    best_index = idx
-                                    best_k = k
-                                    w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
-                                    w_feature = r[6]
-                                    w_a0, w_a1, w_a2 = r[7], r[8], r[9]
-                                    w_flag = r[10]
-                            reach = min(best, upper) * s + SLACK
-                            limit = reach * reach
-                        node = 0 if seed >= 0 else -1  # after the seed, the tree from its root
-                        seed = -1
-                    else:
-                        left = child[node]
-                        right = left + 1
-                        dl = _bound_sqr(bounds, left, s, qx, qy, qz)
-                        dr = _bound_sqr(bounds, right, s, qx, qy, qz)
-                        if dr < dl:
-                            left, right, dl, dr = right, left, dr, dl
-                        if dl <= limit:
-                            if dr <= limit:
-                                stack_node[sp] = right
-                                stack_sqr[sp] = dr
-                                sp += 1
-                            node = left
-                        else:
-                            node = -1
-                    if node < 0:
-                        while sp > 0:
-                            sp -= 1
-                            if stack_sqr[sp] <= limit:
-                                node = stack_node[sp]
-                                break
-                        if node < 0:
+                        node = -1
+                if node < 0:
+                    while sp > 0:
+                        sp -= 1
+                        if stack_sqr[sp] <= limit:
+                            node = stack_node[sp]
                             break
-            prev_k = best_k
-            # An undecided answer could be the least (or tie with it): resolve
-            # every candidate up to the bound exactly, outside the kernel.
-            undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
-            if best_k < 0:
-                dist[i] = math.nan
-                if full:
-                    sqr[i] = math.nan
-                    for c in range(3):
-                        point[i, c] = math.nan
-                        extra[i, c] = math.nan
-                    feature[i] = NONE
-                    flag[i] = False
-                    prim[i] = -1
-                continue
-            dist[i] = best
+                    if node < 0:
+                        break
+        prev_k = best_k
+        # An undecided answer could be the least (or tie with it): resolve
+        # every candidate up to the bound exactly, outside the kernel.
+        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
+        if best_k < 0:
+            dist[i] = math.nan
             if full:
-                sqr[i] = w_sqr
-                point[i, 0] = w_x
-                point[i, 1] = w_y
-                point[i, 2] = w_z
-                feature[i] = np.int8(w_feature)
-                extra[i, 0] = w_a0
-                extra[i, 1] = w_a1
-                extra[i, 2] = w_a2
-                flag[i] = w_flag
-                prim[i] = best_index
+                sqr[i] = math.nan
+                for c in range(3):
+                    point[i, c] = math.nan
+                    extra[i, c] = math.nan
+                feature[i] = NONE
+                flag[i] = False
+                prim[i] = -1
+            continue
+        dist[i] = best
+        if full:
+            sqr[i] = w_sqr
+            point[i, 0] = w_x
+            point[i, 1] = w_y
+            point[i, 2] = w_z
+            feature[i] = np.int8(w_feature)
+            extra[i, 0] = w_a0
+            extra[i, 1] = w_a1
+            extra[i, 2] = w_a2
+            flag[i] = w_flag
+            prim[i] = best_index
+
+
+def _nearest(
+    address_,
+    kinds,
+    params,
+    index,
+    cull,
+    bounds,
+    child,
+    count,
+    depth,
+    magnitude,
+    points,
+    order,
+    dist,
+    sqr,
+    point,
+    feature,
+    extra,
+    flag,
+    prim,
+    undecided,
+    full,
+):
+    """:func:`_nearest_block` for every block of points, on the threads; the
+    method's block function is called at ``address_`` (see
+    :func:`proximity._jit.function_at`), so that this loop compiles once for
+    every method."""
+    block_fn = _nearest_at(address_)
+    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
+        block_fn(
+            np.int64(block),
+            kinds,
+            params,
+            index,
+            cull,
+            bounds,
+            child,
+            count,
+            depth,
+            magnitude,
+            points,
+            order,
+            dist,
+            sqr,
+            point,
+            feature,
+            extra,
+            flag,
+            prim,
+            undecided,
+            full,
+        )
 
 
 @kernel()
@@ -970,6 +1029,7 @@ def _visiting_order(points):
     return np.argsort(_morton(points), kind="stable")
 
 
+@functools.cache
 def query_kernel(method, rounds):
     """The compiled traversal of ``method`` (a :class:`~proximity.methods.Method`),
     for trees of triangles alone or (``rounds``) with disks and circles."""
@@ -984,15 +1044,17 @@ def query_kernel(method, rounds):
         ROUNDS=rounds,
     )
     interval = specialize(_interval, "rounds" if rounds else "triangles", role="inline", ROUNDS=rounds)
-    return specialize(
-        _nearest,
+    block = specialize(
+        _nearest_block,
         tag,
-        _QUERY_SIGNATURE,
-        parallel=True,
+        _BLOCK_SIGNATURE,
+        role="pointer",
         EVALUATE=evaluate,
         INTERVAL=interval,
         EXACT_FALLBACK=method.exact_fallback,
     )
+    loop = specialize(_nearest, "blocks", _QUERY_SIGNATURE, parallel=True)
+    return functools.partial(loop, address(block, _BLOCK_SIGNATURE))
 
 
 def nearest(tree, method, points, full, loose=False):

@@ -11,6 +11,7 @@ The batch kernel here serves circles too: a circle query is a disk query that
 always takes the rim branch.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -19,7 +20,7 @@ from numba.core import types
 
 from . import _exact, _pool, certified, methods
 from ._fp import UNSCALED, unscale
-from ._jit import inline, kernel, part, specialize
+from ._jit import address, function_at, inline, kernel, part, specialize
 from ._loops import (
     A_IN2,
     A_IN3,
@@ -140,9 +141,9 @@ def certified_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py,
 
 
 # Bound per method by :func:`proximity._jit.specialize`: the query of one
-# point, the block function of the batch loop, whether the block runs the
-# robust method's SIMD loop first, and whether the method has an exact fallback.
-QUERY = BLOCK_FN = None
+# point, whether the block function runs the robust method's SIMD loop
+# first, and whether the method has an exact fallback.
+QUERY = None
 SIMD = EXACT_FALLBACK = False
 
 
@@ -277,7 +278,28 @@ def _robust_block_one(
     scatter_round(z, ONE_OUT, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
 
 
+_BLOCK_SIGNATURE = types.void(
+    types.boolean,
+    A_IN3,
+    A_IN3,
+    A_IN3,
+    A_IN2,
+    A_IN3,
+    types.int64,
+    types.int64,
+    types.int64,
+    OUT1,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT_FLAG,
+    OUT1,
+    OUT1,
+    OUT_FLAG,
+    types.boolean,
+)
 _BATCH_SIGNATURE = types.void(
+    types.int64,
     types.boolean,
     A_IN3,
     A_IN3,
@@ -295,22 +317,43 @@ _BATCH_SIGNATURE = types.void(
     OUT_FLAG,
     types.boolean,
 )
+_block_at = function_at(_BLOCK_SIGNATURE)
 
 
-def _batch(is_disk, C, U, N, R, P, n_j, dist, sqr, point, feature, equidistant, height, radial, exact, full):
+def _batch(
+    block_address,
+    is_disk,
+    C,
+    U,
+    N,
+    R,
+    P,
+    n_j,
+    dist,
+    sqr,
+    point,
+    feature,
+    equidistant,
+    height,
+    radial,
+    exact,
+    full,
+):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
     ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
     only ``dist`` is written.  Blocks of queries go to the threads, each
-    handled by the method's block function; the certified method flags in
-    ``exact`` the rows its filter could not decide.
+    handled by the method's block function, called at ``block_address`` (as
+    in :func:`proximity.point_triangle._batch`); the certified method flags
+    in ``exact`` the rows its filter could not decide.
     """
     n = dist.shape[0]
+    block_fn = _block_at(block_address)
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        BLOCK_FN(
+        block_fn(
             is_disk, C, U, N, R, P, n_j, k0, nb,
             dist, sqr, point, feature, equidistant, height, radial, exact, full,
         )  # fmt: skip
@@ -332,21 +375,23 @@ def single_kernel(method):
     return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
 
 
-def block_kernel(method):
-    """The block function of ``method`` for pairs and all-pairs batches."""
-    query_, simd, exact_fallback, _ = KERNELS[method.name]
-    return specialize(
-        _block, method.name, role="part", QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback
-    )
+def block_kernel(method, one):
+    """The block function of ``method``, called by address; ``one``: for
+    many points against one shape."""
+    query_, simd, exact_fallback, block_one = KERNELS[method.name]
+    if one and block_one is not None:
+        func = block_one.py_func
+        return specialize(func, func.__name__, _BLOCK_SIGNATURE, role="pointer")
+    bindings = dict(QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback)
+    return specialize(_block, method.name, _BLOCK_SIGNATURE, role="pointer", **bindings)
 
 
+@functools.cache
 def batch_kernel(method, one):
-    """The compiled batch loop of ``method``; ``one``: every query is against one shape."""
-    block = KERNELS[method.name][3] if one else None
-    tag = "one" if block is not None else method.name
-    if block is None:
-        block = block_kernel(method)
-    return specialize(_batch, tag, _BATCH_SIGNATURE, parallel=True, BLOCK_FN=block)
+    """The compiled batch loop of ``method``, a function of the batch
+    arguments; ``one``: every query is against one shape."""
+    loop = specialize(_batch, "blocks", _BATCH_SIGNATURE, parallel=True)
+    return functools.partial(loop, address(block_kernel(method, one), _BLOCK_SIGNATURE))
 
 
 def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):

@@ -52,6 +52,7 @@ Both methods are dimension-free in the document; here 2D triangles are
 embedded in the ``z = 0`` plane, which changes no distance.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -69,7 +70,7 @@ from ._fp import (
     pow2_scale,
     unscale,
 )
-from ._jit import inline, kernel, part, specialize
+from ._jit import address, function_at, inline, kernel, part, specialize
 from ._loops import (
     A_IN3,
     A_IN4,
@@ -527,9 +528,8 @@ def eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     return certified.CERTAIN, d, sqr, x, y, z, int(f), b0, b1, b2
 
 
-# Bound per method by :func:`proximity._jit.specialize`: the query of one
-# point (``QUERY``) and the block function of the batch loop (``BLOCK_FN``).
-QUERY = BLOCK_FN = None
+# Bound per method by :func:`proximity._jit.specialize`: the query of one point.
+QUERY = None
 
 
 def _single(out, v, p):
@@ -684,26 +684,44 @@ KERNELS = {
     "eberly": (eberly_query, _eberly_block, _eberly_block_one),
 }
 
-_BATCH_SIGNATURE = types.void(
-    A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
+_BLOCK_SIGNATURE = types.void(
+    A_IN4,
+    A_IN3,
+    types.int64,
+    types.int64,
+    types.int64,
+    OUT1,
+    OUT1,
+    OUT2,
+    OUT_FEATURE,
+    OUT2,
+    OUT_FLAG,
+    types.boolean,
 )
+_BATCH_SIGNATURE = types.void(
+    types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
+)
+_block_at = function_at(_BLOCK_SIGNATURE)
 
 
-def _batch(V, P, n_j, dist, sqr, point, feature, bary, exact, full):
+def _batch(block_address, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
     """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
 
     ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
     (zero along broadcast dimensions); output row ``k`` is loop index
     ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and
     the other outputs may be empty.  Blocks of queries go to the threads,
-    each handled by the method's block function; the certified method flags
-    in ``exact`` the rows its filter could not decide.
+    each handled by the method's block function, called at
+    ``block_address`` (so that this loop compiles once for every method);
+    the certified method flags in ``exact`` the rows its filter could not
+    decide.
     """
     n = dist.shape[0]
+    block_fn = _block_at(block_address)
     for block in prange((n + BLOCK - 1) // BLOCK):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
-        BLOCK_FN(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
+        block_fn(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
 
 
 def single_kernel(method):
@@ -712,10 +730,14 @@ def single_kernel(method):
     return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
 
 
+@functools.cache
 def batch_kernel(method, one):
-    """The compiled batch loop of ``method``; ``one``: every query is against one triangle."""
-    block = KERNELS[method.name][2 if one else 1]
-    return specialize(_batch, block.py_func.__name__, _BATCH_SIGNATURE, parallel=True, BLOCK_FN=block)
+    """The compiled batch loop of ``method``, a function of the batch
+    arguments; ``one``: every query is against one triangle."""
+    block = KERNELS[method.name][2 if one else 1].py_func
+    block = specialize(block, block.__name__, _BLOCK_SIGNATURE, role="pointer")
+    loop = specialize(_batch, "blocks", _BATCH_SIGNATURE, parallel=True)
+    return functools.partial(loop, address(block, _BLOCK_SIGNATURE))
 
 
 def query(method, vertices, points, out_shape, full):
