@@ -876,7 +876,7 @@ def primitive_cull(kinds, params):
     n = len(kinds)
     cull = np.empty((n, 11))
     tri = kinds == TRIANGLE
-    _triangle_cull(params, np.flatnonzero(tri), cull)
+    _triangle_cull(_readonly(params, np.float64), np.flatnonzero(tri), cull)
     round_ = ~tri
     loose = cull
     if round_.any():
@@ -905,22 +905,71 @@ def primitive_cull(kinds, params):
     return cull, loose
 
 
+#: From this many rows on, rows are gathered by a compiled parallel loop.
+GATHER_MIN = 1 << 15
+
+
+@kernel(parallel=True)
+def _take_rows(source, rows, out):
+    for m in prange(rows.shape[0]):
+        k = rows[m]
+        for c in range(source.shape[1]):
+            out[m, c] = source[k, c]
+
+
+def take_rows(source, rows):
+    """``source[rows]`` for a 2D float64 ``source``, as a new C-contiguous array."""
+    if len(rows) < GATHER_MIN:
+        return np.ascontiguousarray(source[rows])
+    out = np.empty((len(rows), source.shape[1]))
+    _take_rows(_readonly(source, np.float64), _readonly(rows, np.int64), out)
+    return out
+
+
+@kernel(parallel=True)
+def _triangle_params(vertices, faces, params):
+    for k in prange(faces.shape[0]):
+        for v in range(3):
+            i = faces[k, v]
+            for a in range(3):
+                params[k, 3 * v + a] = vertices[i, a]
+        params[k, 9] = 0.0
+
+
+def triangle_params(vertices, faces):
+    """The parameters ``(F, 10)`` of the triangles ``faces`` of ``vertices``:
+    each face's nine coordinates, then a zero."""
+    if len(faces) < GATHER_MIN:
+        params = np.zeros((len(faces), N_PARAMS))
+        params[:, :9] = vertices[faces].reshape(-1, 9)
+        return params
+    params = np.empty((len(faces), N_PARAMS))
+    _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), params)
+    return params
+
+
 def _tree(kinds, params, order, child, count, depth, cull, index=None):
     tight, loose = cull
-    kinds = _readonly(kinds[order], np.int8)
-    params = _readonly(params[order], np.float64)
-    tight = _readonly(tight[order], np.float64)
+    if order is not None:
+        kinds = kinds[order]
+        params = take_rows(params, order)
+        tight = take_rows(tight, order)
+        if loose is not cull[0]:
+            loose = take_rows(loose, order)
+    kinds = _readonly(kinds, np.int8)
+    params = _readonly(params, np.float64)
+    tight = _readonly(tight, np.float64)
     bounds = _refit(child, count, kinds, params, tight)
     loose_bounds = bounds
     if loose is not cull[0]:
-        loose = _readonly(loose[order], np.float64)
+        loose = _readonly(loose, np.float64)
         loose_bounds = _refit(child, count, kinds, params, loose)
     else:
         loose = tight
     return Tree(
         kinds=kinds,
         params=params,
-        index=_readonly(order if index is None else index, np.int64),
+        index=_readonly(np.arange(len(kinds)) if index is None else index, np.int64),
         child=child,
         count=count,
         bounds=_readonly(bounds, np.float64),
@@ -933,13 +982,20 @@ def _tree(kinds, params, order, child, count, depth, cull, index=None):
 
 @kernel()
 def _row_hashes(kinds, bits):
-    """A 64-bit hash of each primitive's kind and parameter bits (FNV-style mixing)."""
+    """A 64-bit hash of each primitive's kind and parameter bits.
+
+    Each word is mixed in by a multiplication, which carries low bits up,
+    and a shift, which brings the high bits down again: a multiplication
+    alone leaves the hash's low bits blind to the words' high bits, where
+    floats that differ mostly differ.
+    """
     n = bits.shape[0]
     h = np.empty(n, np.uint64)
     for k in range(n):
         x = np.uint64(kinds[k])
         for c in range(bits.shape[1]):
-            x = (x ^ bits[k, c]) * np.uint64(0x100000001B3)
+            x = (x ^ bits[k, c]) * np.uint64(0x9E3779B97F4A7C15)
+            x ^= x >> np.uint64(32)
         h[k] = x
     return h
 
@@ -985,7 +1041,7 @@ def brute(kinds, params):
     """
     n = len(kinds)
     cull = primitive_cull(kinds, params)
-    return _tree(kinds, params, np.arange(n), _readonly([0], np.int64), _readonly([n], np.int64), 0, cull)
+    return _tree(kinds, params, None, _readonly([0], np.int64), _readonly([n], np.int64), 0, cull)
 
 
 def build(kinds, params, leaf_size=LEAF_SIZE):
@@ -1002,14 +1058,17 @@ def build(kinds, params, leaf_size=LEAF_SIZE):
     -------
     Tree
     """
-    kept = np.flatnonzero(distinct(kinds, params))
-    cull = primitive_cull(kinds[kept], params[kept])
+    keep = distinct(kinds, params)
+    kept = np.flatnonzero(keep)
+    if len(kept) < len(kinds):
+        kinds, params = kinds[kept], take_rows(params, kept)
+    cull = primitive_cull(kinds, params)
     lo = _readonly(cull[0][:, 0:3], np.float64)
     hi = _readonly(cull[0][:, 3:6], np.float64)
     nodes, order, depth = _build(lo, hi, int(leaf_size))
     child = _readonly(nodes[:, 0], np.int64)
     count = _readonly(nodes[:, 1], np.int64)
-    return _tree(kinds[kept], params[kept], order, child, count, depth, cull, kept[order])
+    return _tree(kinds, params, order, child, count, depth, cull, kept[order])
 
 
 #: Batches at least this large are queried in Morton order of the points.

@@ -51,6 +51,10 @@ def _broad_phase():
     kinds = np.zeros(8, np.int8)
     params = np.concatenate([rng.random((8, 9)), np.zeros((8, 1))], axis=1)
     tree = bvh.build(kinds, params)
+    # The gathers of large meshes, with the argument types they are given.
+    bvh._take_rows(bvh._readonly(params, np.float64), bvh._readonly([1, 0], np.int64), np.empty((2, 10)))
+    vertices, faces = bvh._readonly(params[:, :3], np.float64), bvh._readonly([[0, 1, 2]], np.int64)
+    bvh._triangle_params(vertices, faces, np.empty((1, 10)))
     points = bvh._readonly(rng.random((2, 3)), np.float64)
     bvh._morton(points)
     bounds, cull, magnitude = tree.boxes(False)
@@ -72,7 +76,8 @@ def _round_frames():
     from . import point_disk
 
     one = np.ones((1, 3))
-    point_disk.round_frames(one, one, np.ones(1), np.empty((1, 3)))
+    one.flags.writeable = False  # as the shapes' arrays are
+    point_disk.round_frames(one, one, one[0, :1], np.empty((1, 3)))
 
 
 def compile_all(methods=None, log=sys.stdout):

@@ -269,6 +269,6 @@ class TriangleMesh(Collection):
 
 def _primitives(vertices, faces):
     """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
-    params = np.zeros((len(faces), 10))
-    params[:, :9] = vertices[faces].reshape(-1, 9)
-    return np.zeros(len(faces), np.int8), params
+    from . import bvh
+
+    return np.zeros(len(faces), np.int8), bvh.triangle_params(vertices, faces)

@@ -456,6 +456,9 @@ def _to_3d(array):
 
 # From this many normals on, a compiled loop computes the unit normals.
 _COMPILED_UNIT = 1 << 16
+# Read-only, as the shapes' arrays are, so that the loop compiles once.
+_NO_ROWS = np.empty((0, 3))
+_NO_ROWS.flags.writeable = False
 
 
 def _unit_normals(center, normal, radius):
@@ -467,8 +470,8 @@ def _unit_normals(center, normal, radius):
 
         unit = _pool.empty(normal.shape)
         rows = normal.size // 3
-        c = center.reshape(-1, 3) if center.size == normal.size else np.empty((0, 3))
-        r = radius.reshape(-1) if radius.size == rows else np.empty(0)
+        c = center.reshape(-1, 3) if center.size == normal.size else _NO_ROWS[:, :3]
+        r = radius.reshape(-1) if radius.size == rows else _NO_ROWS[:, 0]
         if round_frames(c, normal.reshape(-1, 3), r, unit.reshape(-1, 3)) == 0:
             if c.size == 0:
                 require_finite(center, "center")
