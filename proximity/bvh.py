@@ -482,11 +482,18 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     return found
 
 
-@kernel()
-def _morton(points):
-    """15-bit Morton codes of the points on a 32^3 grid over their finite bounding box.
+#: Bits of each coordinate in the Morton codes of the points: a 128^3 grid.
+MORTON_BITS = 7
 
-    Points with a non-finite coordinate go to the last cell.
+
+@kernel()
+def _morton_order(points):
+    """The points in Morton order on a 128^3 grid over their finite bounding
+    box (points with a non-finite coordinate go to the last cell): the
+    sequence of their indices, stable within a cell.
+
+    The 21-bit codes are sorted by two passes of a radix sort, on their low
+    11 and high 10 bits.
     """
     n = points.shape[0]
     low = np.full(3, math.inf)
@@ -496,23 +503,37 @@ def _morton(points):
             for a in range(3):
                 low[a] = min(low[a], points[i, a])
                 high[a] = max(high[a], points[i, a])
+    top = (1 << MORTON_BITS) - 1
     span = max(max(high[0] - low[0], high[1] - low[1]), high[2] - low[2])
-    inv = 31.0 / span if 0.0 < span < math.inf else 0.0
-    codes = np.empty(n, np.int16)
+    inv = top / span if 0.0 < span < math.inf else 0.0
+    codes = np.empty(n, np.int64)
     for i in range(n):
         code = 0
         for a in range(3):
             g = (points[i, a] - low[a]) * inv
             if not (g >= 0.0):  # NaN as well
-                g = 0.0 if g < 0.0 else 31.0
-            x = int(min(g, 31.0))
-            # Spread the five bits of x to every third position.
-            x = (x | (x << 8)) & 0x100F
-            x = (x | (x << 4)) & 0x10C3
-            x = (x | (x << 2)) & 0x1249
-            code |= x << a
+                g = 0.0 if g < 0.0 else float(top)
+            x = int(min(g, float(top)))
+            # Spread the bits of x to every third position.
+            for b in range(MORTON_BITS):
+                code |= ((x >> b) & 1) << (3 * b + a)
         codes[i] = code
-    return codes
+    order = np.arange(n)
+    scratch = np.empty(n, np.int64)
+    for shift, width in ((0, 11), (11, 3 * MORTON_BITS - 11)):
+        mask = (1 << width) - 1
+        starts = np.zeros((1 << width) + 1, np.int64)
+        for i in range(n):
+            starts[((codes[order[i]] >> shift) & mask) + 1] += 1
+        for b in range(1 << width):
+            starts[b + 1] += starts[b]
+        for i in range(n):
+            k = order[i]
+            bucket = (codes[k] >> shift) & mask
+            scratch[starts[bucket]] = k
+            starts[bucket] += 1
+        order, scratch = scratch, order
+    return order
 
 
 @inline
@@ -1084,8 +1105,7 @@ def _visiting_order(points):
     """
     if len(points) < SORT_MIN:
         return np.arange(len(points))
-    # A stable sort of 16-bit keys is a radix sort in NumPy: linear time.
-    return np.argsort(_morton(points), kind="stable")
+    return _morton_order(points)
 
 
 @functools.cache

@@ -56,7 +56,7 @@ def _broad_phase():
     vertices, faces = bvh._readonly(params[:, :3], np.float64), bvh._readonly([[0, 1, 2]], np.int64)
     bvh._triangle_params(vertices, faces, np.empty((1, 10)))
     points = bvh._readonly(rng.random((2, 3)), np.float64)
-    bvh._morton(points)
+    bvh._morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
