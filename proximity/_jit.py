@@ -1,6 +1,6 @@
 """How the kernels are compiled: inlining, the disk cache, and specialisation.
 
-Three decorators and one function, used by every kernel module:
+Three decorators and three functions, used by every kernel module:
 
 ``inline``
     A helper inlined by LLVM into its callers (``forceinline``).  Numba
@@ -14,11 +14,15 @@ Three decorators and one function, used by every kernel module:
     (see :data:`CACHE`).
 :func:`specialize`
     A kernel written once and compiled per method: its body refers to
-    upper-case global names (``QUERY``, ``BLOCK_FN``, ...) that
+    upper-case global names (``QUERY``, ``EVALUATE``, ...) that
     :func:`specialize` binds to one method's functions in a copy of the
     function.  A comparison of such a constant is folded before typing, so
     a specialised kernel compiles only the code of its method.  Nothing is
     compiled before the first call that needs it.
+:func:`address` and :func:`function_at`
+    A block function called by a parallel loop through its address, so
+    that the loop compiles once for every method and the block is not
+    compiled again inside it.
 
 The cache sits next to the sources (Numba's default).  Where that directory
 cannot be written (a read-only install), Numba's user-wide cache directory
