@@ -190,11 +190,10 @@ def function_at(signature):
     @intrinsic
     def at(typingctx, address_):
         def codegen(context, builder, sig, args):
+            # The other members (the Python object, the Numba entry point)
+            # start out null, so that the call goes to the C entry point.
             fn = cgutils.create_struct_proxy(function_type)(context, builder)
-            null = ir.Constant(ir.IntType(8).as_pointer(), None)
-            fn.c_addr = builder.inttoptr(args[0], null.type)
-            fn.py_addr = null
-            fn.jit_addr = null
+            fn.c_addr = builder.inttoptr(args[0], ir.IntType(8).as_pointer())
             return fn._getvalue()
 
         return function_type(nb_types.int64), codegen
