@@ -298,25 +298,8 @@ _BLOCK_SIGNATURE = types.void(
     OUT_FLAG,
     types.boolean,
 )
-_BATCH_SIGNATURE = types.void(
-    types.int64,
-    types.boolean,
-    A_IN3,
-    A_IN3,
-    A_IN3,
-    A_IN2,
-    A_IN3,
-    types.int64,
-    OUT1,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT_FLAG,
-    OUT1,
-    OUT1,
-    OUT_FLAG,
-    types.boolean,
-)
+# The batch loop: the block's address, then the block's arguments but ``k0, nb``.
+_BATCH_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[:7], *_BLOCK_SIGNATURE.args[9:])
 _block_at = function_at(_BLOCK_SIGNATURE)
 
 

@@ -698,9 +698,8 @@ _BLOCK_SIGNATURE = types.void(
     OUT_FLAG,
     types.boolean,
 )
-_BATCH_SIGNATURE = types.void(
-    types.int64, A_IN4, A_IN3, types.int64, OUT1, OUT1, OUT2, OUT_FEATURE, OUT2, OUT_FLAG, types.boolean
-)
+# The batch loop: the block's address, then the block's arguments but ``k0, nb``.
+_BATCH_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[:3], *_BLOCK_SIGNATURE.args[5:])
 _block_at = function_at(_BLOCK_SIGNATURE)
 
 
