@@ -47,11 +47,13 @@ class Collection(Frozen):
         return broad_phase, tree
 
     # Pickling.  The tree's primitive data are copies of the collection's own
-    # arrays, and its primitives' boxes and slabs follow from them row by row
-    # (:func:`proximity.bvh.primitive_cull`, NumPy alone), so a pickle holds
-    # only what the build decided: which primitives, in which order, the
-    # nodes and their bounds.  Unpickling builds no hierarchy and compiles
-    # nothing, and the pickle is little more than the collection's own data.
+    # arrays, its primitives' boxes and slabs follow from them row by row
+    # (:func:`proximity.bvh.primitive_cull`, NumPy alone), and its node
+    # bounds from those and the topology (:func:`proximity.bvh.refit`, a
+    # pass over the primitives), so a pickle holds only what the build
+    # decided: which primitives, in which order, and the nodes.  Unpickling
+    # builds no hierarchy, and the pickle is little more than the
+    # collection's own data.
 
     def __getstate__(self):
         state = super().__getstate__()
@@ -60,9 +62,6 @@ class Collection(Frozen):
             "index": tree.index,
             "child": tree.child,
             "count": tree.count,
-            "bounds": tree.bounds,
-            # The loose bounds are the tight ones unless the collection holds circles.
-            "loose_bounds": None if tree.loose_cull is tree.cull else tree.loose_bounds,
             "depth": tree.depth,
         }
         return state
@@ -83,26 +82,11 @@ class Collection(Frozen):
         index = read_only(hierarchy["index"], np.int64)
         kinds, params = self._primitives(index)
         kinds, params = read_only(kinds, np.int8), read_only(params, np.float64)
-        tight, loose = bvh.primitive_cull(kinds, params)
-        bounds = read_only(hierarchy["bounds"], np.float64)
-        loose_bounds = hierarchy["loose_bounds"]
-        cull = read_only(tight, np.float64)
-        if loose_bounds is None:
-            loose_bounds, loose_cull = bounds, cull
-        else:
-            loose_bounds, loose_cull = read_only(loose_bounds, np.float64), read_only(loose, np.float64)
-        return bvh.Tree(
-            kinds=kinds,
-            params=params,
-            index=index,
-            child=read_only(hierarchy["child"], np.int64),
-            count=read_only(hierarchy["count"], np.int64),
-            bounds=bounds,
-            cull=cull,
-            loose_bounds=loose_bounds,
-            loose_cull=loose_cull,
-            depth=int(hierarchy["depth"]),
-        )
+        child = read_only(hierarchy["child"], np.int64)
+        count = read_only(hierarchy["count"], np.int64)
+        # Node bounds that pickles of earlier versions hold are not read.
+        with _threads.kernel():
+            return bvh.assemble(kinds, params, index, child, count, hierarchy["depth"])
 
     def _query(self, points, method, full):
         method = check_method(method, self.methods)

@@ -17,7 +17,7 @@ hierarchy of a single leaf holding every primitive in index order.
 Hierarchy
 ---------
 Built once, on primitive boxes, by binned surface-area heuristic (``BINS``
-bins on the centroids along each axis, splitting until a node holds at most
+bins on the centroids along their longest axis, splitting until a node holds at most
 ``LEAF_SIZE`` primitives; nodes whose centroids coincide are cut in half by
 index).  Nodes are stored breadth first, so the children of a node are
 adjacent in memory.
@@ -26,14 +26,17 @@ Pruning, and why it never changes the answer
 --------------------------------------------
 The traversal visits the nearer child first and skips a node when a lower
 bound on the distance from the point to what it holds exceeds ``best +
-SLACK``.  The bound is the larger of two: the distance to the node's box,
-and to its *slab*: for a unit-or-shorter vector ``u`` and the range
-``[h_min, h_max]`` of ``u . X`` over everything in the node, every point
-there is at least ``max(u . P - h_max, h_min - u . P)`` from ``P``.  A
-node's ``u`` is the mean normal of its primitives, so a flat patch has a
-thin slab that prunes where its box would not (a point far over a tilted
-patch, or near the center of a sphere); a primitive's ``u`` is its own
-normal, and for a point over a face's interior the slab distance is the
+SLACK``.  A *slab* is a vector ``u`` no longer than 1 and the range
+``[h_min, h_max]`` of ``u . X`` over everything it bounds: every such ``X``
+is at least ``e = max(u . P - h_max, h_min - u . P, 0)`` from ``P``.  A
+node has its box and an oriented box, three slabs on orthogonal axes
+``u``, ``v``, ``w``, whose excesses add in squares (``|P - X|^2 >= e_u^2 +
+e_v^2 + e_w^2``); the bound is the larger of the distances to the two
+boxes.  A node's ``u`` is the mean normal of its primitives, so a flat
+patch has an oriented box thin along its normal and tight across it, which
+prunes where the axis-aligned box would not (a point far over a tilted
+patch, or inside a sphere).  A primitive has its box and the slab of its
+own normal: for a point over a face's interior the slab distance is the
 distance itself, so faces that are merely near are skipped without calling
 the method.
 
@@ -43,7 +46,9 @@ of ``M``, the largest coordinate magnitude of the point and of every box:
 * the tests run on coordinates multiplied by a power of two ``s`` with
   ``M s`` in ``[0.5, 1)`` (exact), so squares neither overflow nor lose
   anything that matters to underflow, and their rounding is a few ``eps``;
-  a slab's ``u`` and range carry a few ``eps`` more;
+  a slab's ``u`` and range carry a few ``eps`` more, and the axes of an
+  oriented box, each shortened by ``2^-40``, are orthogonal far within
+  that, so the sum of squares never exceeds ``|P - X|^2``;
 * every primitive lies in its box and its slab, and each method's computed
   distance is at least the true distance to them minus a few tens of
   ``eps M``: ``robust`` is within ``8 eps S`` of the true distance, with
@@ -185,14 +190,24 @@ def _box_sqr(bounds, node, s, qx, qy, qz):
 
 
 @inline
-def _bound_sqr(boxes, k, s, qx, qy, qz):
-    """Squared lower bound on the distance from the scaled point to what box and slab ``k`` hold.
+def _excess(boxes, k, c, s, qx, qy, qz):
+    """How far the scaled point lies outside the slab ``(u, h_min, h_max)`` at
+    ``boxes[k, c:c + 5]``: 0 within it."""
+    t = boxes[k, c] * qx + boxes[k, c + 1] * qy + boxes[k, c + 2] * qz
+    return max(max(t - boxes[k, c + 4] * s, boxes[k, c + 3] * s - t), 0.0)
 
-    ``boxes[k]`` is ``(lo, hi, u, h_min, h_max)``; see the module docstring.
+
+@inline
+def _bound_sqr(boxes, k, s, qx, qy, qz):
+    """Squared lower bound on the distance from the scaled point to what node ``k`` holds.
+
+    ``boxes[k]`` is ``(lo, hi)`` and three slabs ``(u, h_min, h_max)``
+    across orthogonal axes; see the module docstring.
     """
-    t = boxes[k, 6] * qx + boxes[k, 7] * qy + boxes[k, 8] * qz
-    h = max(max(t - boxes[k, 10] * s, boxes[k, 9] * s - t), 0.0)
-    return max(_box_sqr(boxes, k, s, qx, qy, qz), h * h)
+    hu = _excess(boxes, k, 6, s, qx, qy, qz)
+    hv = _excess(boxes, k, 11, s, qx, qy, qz)
+    hw = _excess(boxes, k, 16, s, qx, qy, qz)
+    return max(_box_sqr(boxes, k, s, qx, qy, qz), hu * hu + hv * hv + hw * hw)
 
 
 @inline
@@ -203,8 +218,7 @@ def _culled(cull, k, s, qx, qy, qz, reach):
     """
     if _box_sqr(cull, k, s, qx, qy, qz) > reach * reach:
         return True
-    t = cull[k, 6] * qx + cull[k, 7] * qy + cull[k, 8] * qz
-    return max(t - cull[k, 10] * s, cull[k, 9] * s - t) > reach
+    return _excess(cull, k, 6, s, qx, qy, qz) > reach
 
 
 @inline
@@ -553,11 +567,15 @@ def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax):
     bin_lo = np.full((3, BINS, 3), math.inf)
     bin_hi = np.full((3, BINS, 3), -math.inf)
     scale = np.zeros(3)
+    longest = -1
+    widest = 0.0
     for a in range(3):
         extent = cmax[i, a] - cmin[i, a]
-        if extent > 0.0 and extent < math.inf:
-            scale[a] = BINS / extent
-    # One pass bins the centroids along all three axes.
+        if extent > widest and extent < math.inf:
+            longest, widest = a, extent
+    if longest >= 0:
+        scale[longest] = BINS / widest
+    # Centroids are binned along the longest axis of their bounds alone.
     for j in range(start, end):
         for a in range(3):
             if scale[a] == 0.0:
@@ -647,10 +665,11 @@ def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax):
 
 
 @kernel(parallel=True)
-def _build(boxes_lo, boxes_hi, leaf_size):
-    """Topology of a hierarchy over boxes ``boxes_lo``, ``boxes_hi`` (n, 3), n >= 1.
+def _build(boxes, leaf_size):
+    """Topology of a hierarchy over the boxes ``boxes[:, 0:3]`` (low
+    corners) and ``boxes[:, 3:6]`` (high corners), n >= 1 rows.
 
-    Returns ``(nodes, order, depth)``: ``nodes[i] = (child, count)`` as in
+    Returns ``(child, count, order, depth)``: the nodes as in
     :func:`_nearest`, ``order[j]`` the primitive stored at position ``j``,
     and the largest depth of a leaf.
 
@@ -659,7 +678,7 @@ def _build(boxes_lo, boxes_hi, leaf_size):
     a level's nodes are numbered in order after it (breadth first, so that a
     node's children are adjacent and come after it).
     """
-    n = boxes_lo.shape[0]
+    n = boxes.shape[0]
     cap = 2 * n - 1
     child = np.zeros(cap, np.int64)
     count = np.zeros(cap, np.int64)
@@ -673,10 +692,10 @@ def _build(boxes_lo, boxes_hi, leaf_size):
     cen = np.empty((n, 3))
     for j in prange(n):
         for a in range(3):
-            lo[j, a] = boxes_lo[j, a]
-            hi[j, a] = boxes_hi[j, a]
+            lo[j, a] = boxes[j, a]
+            hi[j, a] = boxes[j, 3 + a]
             # Halves first: the sum of two coordinates near 1e308 would overflow.
-            cen[j, a] = boxes_lo[j, a] * 0.5 + boxes_hi[j, a] * 0.5
+            cen[j, a] = boxes[j, a] * 0.5 + boxes[j, 3 + a] * 0.5
     for a in range(3):
         cmin[0, a] = math.inf
         cmax[0, a] = -math.inf
@@ -699,28 +718,94 @@ def _build(boxes_lo, boxes_hi, leaf_size):
             if count[i] > leaf_size:
                 _split(i, first_child[i], child, count, cen, lo, hi, order, cmin, cmax)
         begin = end_level
-    nodes = np.empty((n_nodes, 2), np.int64)
-    for i in range(n_nodes):
-        nodes[i, 0] = child[i]
-        nodes[i, 1] = count[i]
-    return nodes, order, depth
+    return child[:n_nodes].copy(), count[:n_nodes].copy(), order, depth
 
 
-@kernel()
-def _refit(child, count, kinds, params, cull):
-    """Node boxes and slabs ``(lo, hi, u, h_min, h_max)``, ``(m, 11)``, over the stored primitives.
+@inline
+def _across(ux, uy, uz):
+    """Two vectors ``v``, ``w`` that make with ``u`` an orthogonal frame of
+    vectors no longer than 1 (zero where ``u`` is zero).
 
-    ``u`` is the normalised sum of the primitives' slab directions (their
-    normals), shortened as in :func:`_shorter_than_one`, and ``[h_min,
-    h_max]`` the range of ``u . X`` over the triangles' vertices and the
-    corners of the other primitives' boxes; an overflowing range is
-    unbounded.  A flat patch of faces gets a thin slab, which prunes where
-    its box alone would not (a point over the middle of a tilted patch).
+    ``v`` is ``u`` with its smallest component zeroed and the other two
+    swapped, one negated, which is perpendicular to ``u`` exactly; ``w`` is
+    ``u x v``.  Both are normalised and shortened as ``u`` is (see
+    :func:`_shorter_than_one`), which leaves the frame's rounding far inside
+    the shortening.
+    """
+    if abs(ux) <= abs(uy) and abs(ux) <= abs(uz):
+        vx, vy, vz = 0.0, -uz, uy
+    elif abs(uy) <= abs(uz):
+        vx, vy, vz = uz, 0.0, -ux
+    else:
+        vx, vy, vz = -uy, ux, 0.0
+    wx, wy, wz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    lw = math.sqrt(wx * wx + wy * wy + wz * wz)
+    sv = (1.0 - 2.0**-40) / lv if lv > 0.0 else 0.0
+    sw = (1.0 - 2.0**-40) / lw if lw > 0.0 else 0.0
+    return vx * sv, vy * sv, vz * sv, wx * sw, wy * sw, wz * sw
+
+
+#: Columns of a node's bounds: its box ``(lo, hi)``, then three slabs
+#: ``(axis, h_min, h_max)`` on the orthogonal axes ``u``, ``v``, ``w``.
+NODE_COLUMNS = 21
+
+
+@inline
+def _ranges(bounds, i, first, last, kinds, params, cull):
+    """The ranges of node ``i``'s three slabs over stored primitives ``first .. last - 1``."""
+    ux, uy, uz = bounds[i, 6], bounds[i, 7], bounds[i, 8]
+    vx, vy, vz = bounds[i, 11], bounds[i, 12], bounds[i, 13]
+    wx, wy, wz = bounds[i, 16], bounds[i, 17], bounds[i, 18]
+    lu, hu = math.inf, -math.inf
+    lv, hv = math.inf, -math.inf
+    lw, hw = math.inf, -math.inf
+    for k in range(first, last):
+        triangle = kinds[k] == TRIANGLE
+        for c in range(3 if triangle else 8):
+            if triangle:
+                x, y, z = params[k, 3 * c], params[k, 3 * c + 1], params[k, 3 * c + 2]
+            else:
+                x = cull[k, 3 if c & 1 else 0]
+                y = cull[k, 4 if c & 2 else 1]
+                z = cull[k, 5 if c & 4 else 2]
+            h = ux * x + uy * y + uz * z
+            lu, hu = min(lu, h), max(hu, h)
+            h = vx * x + vy * y + vz * z
+            lv, hv = min(lv, h), max(hv, h)
+            h = wx * x + wy * y + wz * z
+            lw, hw = min(lw, h), max(hw, h)
+    for c, low, high in ((9, lu, hu), (14, lv, hv), (19, lw, hw)):
+        finite = math.isfinite(low) and math.isfinite(high)
+        bounds[i, c] = low if finite else -math.inf
+        bounds[i, c + 1] = high if finite else math.inf
+
+
+#: Nodes over at most this many primitives have their slabs fitted subtree
+#: by subtree, while the subtree's primitives are in cache.
+REFIT_SUBTREE = 8192
+
+
+@kernel(parallel=True)
+def refit(child, count, kinds, params, cull):
+    """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+
+    Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
+    ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
+    slab directions (their normals), shortened as in
+    :func:`_shorter_than_one`, and ``v``, ``w`` complete it to an orthogonal
+    frame (:func:`_across`); each range is that of ``axis . X`` over the
+    triangles' vertices and the corners of the other primitives' boxes, and
+    an overflowing range is unbounded.  A flat patch of faces gets a thin
+    box along its normal and a tight one across it, which prunes where the
+    axis-aligned box alone would not (a point over a tilted patch, or near
+    the center of a sphere).
     """
     m = child.shape[0]
-    bounds = np.empty((m, 11))
+    bounds = np.empty((m, NODE_COLUMNS))
     start = np.empty(m, np.int64)
     end = np.empty(m, np.int64)
+    normal = np.zeros((m, 3))
     # Children come after their parent, so a backward sweep sees them first.
     for i in range(m - 1, -1, -1):
         for a in range(3):
@@ -733,6 +818,7 @@ def _refit(child, count, kinds, params, cull):
                 for a in range(3):
                     bounds[i, a] = min(bounds[i, a], cull[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
+                    normal[i, a] += cull[k, 6 + a]
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
@@ -740,41 +826,43 @@ def _refit(child, count, kinds, params, cull):
                 for a in range(3):
                     bounds[i, a] = min(bounds[i, a], bounds[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
-    for i in range(m):
-        ux, uy, uz = 0.0, 0.0, 0.0
-        for k in range(start[i], end[i]):
-            ux += cull[k, 6]
-            uy += cull[k, 7]
-            uz += cull[k, 8]
+                    normal[i, a] += normal[k, a]
+    roots = np.zeros(m, np.bool_)  # nodes whose subtree is fitted as one task
+    for i in prange(m):
+        ux, uy, uz = normal[i, 0], normal[i, 1], normal[i, 2]
         length = math.sqrt(ux * ux + uy * uy + uz * uz)
         if length > 0.0 and length < math.inf:
             shrink = (1.0 - 2.0**-40) / length
             ux, uy, uz = ux * shrink, uy * shrink, uz * shrink
         else:
             ux, uy, uz = 0.0, 0.0, 0.0
-        low = math.inf
-        high = -math.inf
-        for k in range(start[i], end[i]):
-            if kinds[k] == TRIANGLE:
-                for v in range(3):
-                    h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
-                    low = min(low, h)
-                    high = max(high, h)
-            else:
-                for corner in range(8):
-                    x = cull[k, 3 if corner & 1 else 0]
-                    y = cull[k, 4 if corner & 2 else 1]
-                    z = cull[k, 5 if corner & 4 else 2]
-                    h = ux * x + uy * y + uz * z
-                    low = min(low, h)
-                    high = max(high, h)
-        if not (math.isfinite(low) and math.isfinite(high)):
-            low, high = -math.inf, math.inf
-        bounds[i, 6] = ux
-        bounds[i, 7] = uy
-        bounds[i, 8] = uz
-        bounds[i, 9] = low
-        bounds[i, 10] = high
+        vx, vy, vz, wx, wy, wz = _across(ux, uy, uz)
+        bounds[i, 6], bounds[i, 7], bounds[i, 8] = ux, uy, uz
+        bounds[i, 11], bounds[i, 12], bounds[i, 13] = vx, vy, vz
+        bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
+        small = end[i] - start[i] <= REFIT_SUBTREE
+        if count[i] == 0:
+            for k in range(child[i], child[i] + 2):
+                roots[k] = not small and end[k] - start[k] <= REFIT_SUBTREE
+        if i == 0:
+            roots[i] = small
+    top = np.flatnonzero(end - start > REFIT_SUBTREE)
+    for j in prange(top.shape[0]):
+        i = top[j]
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull)
+    subtrees = np.flatnonzero(roots)
+    for j in prange(subtrees.shape[0]):
+        stack = np.empty(REFIT_SUBTREE + 2, np.int64)
+        stack[0] = subtrees[j]
+        sp = 1
+        while sp > 0:
+            sp -= 1
+            i = stack[sp]
+            _ranges(bounds, i, start[i], end[i], kinds, params, cull)
+            if count[i] == 0:
+                stack[sp] = child[i]
+                stack[sp + 1] = child[i] + 1
+                sp += 2
     return bounds
 
 
@@ -799,8 +887,8 @@ class Tree:
         The caller's index of each stored primitive.
     child, count : ndarray of int64, shape ``(m,)``
         Node topology (see :func:`_nearest`); one leaf for brute force.
-    bounds : ndarray of float64, shape ``(m, 11)``
-        Node boxes and slabs ``(lo, hi, u, h_min, h_max)`` (see :func:`_refit`).
+    bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
+        Node boxes and oriented boxes (see :func:`refit`).
     cull : ndarray of float64, shape ``(n, 11)``
         Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``.
     loose_bounds, loose_cull : ndarray of float64
@@ -857,11 +945,12 @@ def _slab(u, points):
 
 
 @kernel()
-def _triangle_cull(params, rows, cull):
-    """:func:`primitive_cull` for the triangles at ``rows``: their box, and
-    the slab of their normal shortened as :func:`_shorter_than_one` does."""
-    for m in range(rows.shape[0]):
-        k = rows[m]
+def _triangle_cull(kinds, params, cull):
+    """:func:`primitive_cull` for the triangles: their box, and the slab of
+    their normal shortened as :func:`_shorter_than_one` does."""
+    for k in range(kinds.shape[0]):
+        if kinds[k] != TRIANGLE:
+            continue
         for a in range(3):
             cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
             cull[k, 3 + a] = max(max(params[k, a], params[k, 3 + a]), params[k, 6 + a])
@@ -895,9 +984,9 @@ def primitive_cull(kinds, params):
     slab.
     """
     n = len(kinds)
-    cull = np.empty((n, 11))
+    cull = empty(n, 11)
     tri = kinds == TRIANGLE
-    _triangle_cull(_readonly(params, np.float64), np.flatnonzero(tri), cull)
+    _triangle_cull(_readonly(kinds, np.int8), _readonly(params, np.float64), cull)
     round_ = ~tri
     loose = cull
     if round_.any():
@@ -930,6 +1019,24 @@ def primitive_cull(kinds, params):
 GATHER_MIN = 1 << 15
 
 
+@kernel()
+def _empty(rows, columns):
+    return np.empty((rows, columns))
+
+
+def empty(rows, columns):
+    """An uninitialised float64 array ``(rows, columns)`` for the build.
+
+    Large ones come from Numba's allocator.  NumPy asks the kernel to back
+    arrays of 4 MiB and more with transparent huge pages, and where the
+    kernel compacts memory to find them on demand, the first writes to
+    such an array can stall for a quarter of a second.
+    """
+    if rows * columns < GATHER_MIN:
+        return np.empty((rows, columns))
+    return _empty(rows, columns)
+
+
 @kernel(parallel=True)
 def _take_rows(source, rows, out):
     for m in prange(rows.shape[0]):
@@ -942,7 +1049,7 @@ def take_rows(source, rows):
     """``source[rows]`` for a 2D float64 ``source``, as a new C-contiguous array."""
     if len(rows) < GATHER_MIN:
         return np.ascontiguousarray(source[rows])
-    out = np.empty((len(rows), source.shape[1]))
+    out = empty(len(rows), source.shape[1])
     _take_rows(_readonly(source, np.float64), _readonly(rows, np.int64), out)
     return out
 
@@ -964,7 +1071,7 @@ def triangle_params(vertices, faces):
         params = np.zeros((len(faces), N_PARAMS))
         params[:, :9] = vertices[faces].reshape(-1, 9)
         return params
-    params = np.empty((len(faces), N_PARAMS))
+    params = empty(len(faces), N_PARAMS)
     _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), params)
     return params
 
@@ -974,29 +1081,39 @@ def _tree(kinds, params, order, child, count, depth, cull, index=None):
     if order is not None:
         kinds = kinds[order]
         params = take_rows(params, order)
-        tight = take_rows(tight, order)
-        if loose is not cull[0]:
-            loose = take_rows(loose, order)
+        ordered = take_rows(tight, order)
+        loose = ordered if loose is tight else take_rows(loose, order)
+        tight = ordered
+    index = np.arange(len(kinds)) if index is None else index
+    return assemble(kinds, params, index, child, count, depth, (tight, loose))
+
+
+def assemble(kinds, params, index, child, count, depth, cull=None):
+    """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
+
+    ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
+    computed here when not given; the node bounds are fitted to them.
+    """
+    tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = _readonly(kinds, np.int8)
     params = _readonly(params, np.float64)
-    tight = _readonly(tight, np.float64)
-    bounds = _refit(child, count, kinds, params, tight)
-    loose_bounds = bounds
-    if loose is not cull[0]:
-        loose = _readonly(loose, np.float64)
-        loose_bounds = _refit(child, count, kinds, params, loose)
+    tight_ro = _readonly(tight, np.float64)
+    bounds = _readonly(refit(child, count, kinds, params, tight_ro), np.float64)
+    if loose is tight:
+        loose_ro, loose_bounds = tight_ro, bounds
     else:
-        loose = tight
+        loose_ro = _readonly(loose, np.float64)
+        loose_bounds = _readonly(refit(child, count, kinds, params, loose_ro), np.float64)
     return Tree(
         kinds=kinds,
         params=params,
-        index=_readonly(np.arange(len(kinds)) if index is None else index, np.int64),
-        child=child,
-        count=count,
-        bounds=_readonly(bounds, np.float64),
-        cull=tight,
-        loose_bounds=_readonly(loose_bounds, np.float64),
-        loose_cull=loose,
+        index=_readonly(index, np.int64),
+        child=_readonly(child, np.int64),
+        count=_readonly(count, np.int64),
+        bounds=bounds,
+        cull=tight_ro,
+        loose_bounds=loose_bounds,
+        loose_cull=loose_ro,
         depth=int(depth),
     )
 
@@ -1033,13 +1150,18 @@ def distinct(kinds, params):
     n = len(kinds)
     bits = params.view(np.uint64)
     h = _row_hashes(kinds, bits)
+    keep = np.ones(n, np.bool_)
+    # Distinct hashes, the usual case, are seen by a sort of the hashes
+    # alone, several times faster than the stable sort of their order.
+    sorted_h = np.sort(h)
+    if n < 2 or (sorted_h[1:] != sorted_h[:-1]).all():
+        return keep
     order = np.argsort(h, kind="stable")
     sorted_h = h[order]
     starts = np.concatenate([[True], sorted_h[1:] != sorted_h[:-1]])
     # The first of each run of equal hashes has the lowest index (the sort is
     # stable); a later row that equals it bit for bit is a copy.
     later = np.flatnonzero(~starts)
-    keep = np.ones(n, np.bool_)
     if len(later):
         first = order[np.maximum.accumulate(np.where(starts, np.arange(n), 0))[later]]
         rows = order[later]
@@ -1084,12 +1206,9 @@ def build(kinds, params, leaf_size=LEAF_SIZE):
     if len(kept) < len(kinds):
         kinds, params = kinds[kept], take_rows(params, kept)
     cull = primitive_cull(kinds, params)
-    lo = _readonly(cull[0][:, 0:3], np.float64)
-    hi = _readonly(cull[0][:, 3:6], np.float64)
-    nodes, order, depth = _build(lo, hi, int(leaf_size))
-    child = _readonly(nodes[:, 0], np.int64)
-    count = _readonly(nodes[:, 1], np.int64)
-    return _tree(kinds, params, order, child, count, depth, cull, kept[order])
+    child, count, order, depth = _build(_readonly(cull[0], np.float64), int(leaf_size))
+    index = order if len(kept) == len(keep) else kept[order]
+    return _tree(kinds, params, order, child, count, depth, cull, index)
 
 
 #: Batches at least this large are queried in Morton order of the points.
