@@ -51,7 +51,8 @@ def _broad_phase():
     kinds = np.zeros(8, np.int8)
     params = np.concatenate([rng.random((8, 9)), np.zeros((8, 1))], axis=1)
     tree = bvh.build(kinds, params)
-    # The gathers of large meshes, with the argument types they are given.
+    # The allocation and gathers of large meshes, with the argument types they are given.
+    bvh._empty(1, 1)
     bvh._take_rows(bvh._readonly(params, np.float64), bvh._readonly([1, 0], np.int64), np.empty((2, 10)))
     vertices, faces = bvh._readonly(params[:, :3], np.float64), bvh._readonly([[0, 1, 2]], np.int64)
     bvh._triangle_params(vertices, faces, np.empty((1, 10)))

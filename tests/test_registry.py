@@ -141,5 +141,5 @@ def test_a_new_process_loads_what_compile_all_compiled(tmp_path):
         return set(ast.literal_eval(run.stdout.strip().splitlines()[-1]))
 
     ahead = compiled("import proximity.compile; proximity.compile.compile_all([], log=None)")
-    assert {"_build", "_refit", "_take_rows", "round_frames", "_morton_order"} <= ahead
+    assert {"_build", "refit", "_empty", "_take_rows", "round_frames", "_morton_order"} <= ahead
     assert not compiled(_QUERIES) & ahead
