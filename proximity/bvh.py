@@ -786,20 +786,15 @@ def _ranges(bounds, i, first, last, kinds, params, cull):
 REFIT_SUBTREE = 8192
 
 
-@kernel(parallel=True)
-def refit(child, count, kinds, params, cull):
-    """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+@kernel()
+def _refit_nodes(child, count, kinds, params, cull):
+    """:func:`refit`'s nodes with their boxes and frames, but no slab ranges.
 
-    Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
-    ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
-    slab directions (their normals), shortened as in
-    :func:`_shorter_than_one`, and ``v``, ``w`` complete it to an orthogonal
-    frame (:func:`_across`); each range is that of ``axis . X`` over the
-    triangles' vertices and the corners of the other primitives' boxes, and
-    an overflowing range is unbounded.  A flat patch of faces gets a thin
-    box along its normal and a tight one across it, which prunes where the
-    axis-aligned box alone would not (a point over a tilted patch, or near
-    the center of a sphere).
+    Returns ``(bounds, start, end, tasks, whole)``: node ``i`` holds stored
+    primitives ``start[i] .. end[i] - 1``; the ranges are fitted by
+    :func:`_fit`, node by node for the nodes ``tasks[j]`` over more than
+    :data:`REFIT_SUBTREE` primitives, and for the whole subtree of the
+    others (``whole[j]``).
     """
     m = child.shape[0]
     bounds = np.empty((m, NODE_COLUMNS))
@@ -827,8 +822,10 @@ def refit(child, count, kinds, params, cull):
                     bounds[i, a] = min(bounds[i, a], bounds[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
                     normal[i, a] += normal[k, a]
-    roots = np.zeros(m, np.bool_)  # nodes whose subtree is fitted as one task
-    for i in prange(m):
+    tasks = np.empty(m, np.int64)
+    whole = np.empty(m, np.bool_)
+    n_tasks = 0
+    for i in range(m):
         ux, uy, uz = normal[i, 0], normal[i, 1], normal[i, 2]
         length = math.sqrt(ux * ux + uy * uy + uz * uz)
         if length > 0.0 and length < math.inf:
@@ -840,30 +837,74 @@ def refit(child, count, kinds, params, cull):
         bounds[i, 6], bounds[i, 7], bounds[i, 8] = ux, uy, uz
         bounds[i, 11], bounds[i, 12], bounds[i, 13] = vx, vy, vz
         bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
-        small = end[i] - start[i] <= REFIT_SUBTREE
-        if count[i] == 0:
-            for k in range(child[i], child[i] + 2):
-                roots[k] = not small and end[k] - start[k] <= REFIT_SUBTREE
-        if i == 0:
-            roots[i] = small
-    top = np.flatnonzero(end - start > REFIT_SUBTREE)
-    for j in prange(top.shape[0]):
-        i = top[j]
-        _ranges(bounds, i, start[i], end[i], kinds, params, cull)
-    subtrees = np.flatnonzero(roots)
-    for j in prange(subtrees.shape[0]):
+        if end[i] - start[i] > REFIT_SUBTREE:
+            tasks[n_tasks], whole[n_tasks] = i, False
+            n_tasks += 1
+            if count[i] == 0:
+                for k in range(child[i], child[i] + 2):
+                    if end[k] - start[k] <= REFIT_SUBTREE:
+                        tasks[n_tasks], whole[n_tasks] = k, True
+                        n_tasks += 1
+        elif i == 0:
+            tasks[n_tasks], whole[n_tasks] = i, True
+            n_tasks += 1
+    return bounds, start, end, tasks[:n_tasks], whole[:n_tasks]
+
+
+def _fit(bounds, tasks, whole, start, end, child, count, kinds, params, cull):
+    """The slab ranges of each node ``tasks[j]``, and of its whole subtree
+    where ``whole[j]`` (compiled serial and parallel, see :func:`refit`)."""
+    for j in prange(tasks.shape[0]):
         stack = np.empty(REFIT_SUBTREE + 2, np.int64)
-        stack[0] = subtrees[j]
+        stack[0] = tasks[j]
         sp = 1
         while sp > 0:
             sp -= 1
             i = stack[sp]
             _ranges(bounds, i, start[i], end[i], kinds, params, cull)
-            if count[i] == 0:
+            if whole[j] and count[i] == 0:
                 stack[sp] = child[i]
                 stack[sp + 1] = child[i] + 1
                 sp += 2
+
+
+def refit(child, count, kinds, params, cull):
+    """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+
+    Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
+    ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
+    slab directions (their normals), shortened as in
+    :func:`_shorter_than_one`, and ``v``, ``w`` complete it to an orthogonal
+    frame (:func:`_across`); each range is that of ``axis . X`` over the
+    triangles' vertices and the corners of the other primitives' boxes, and
+    an overflowing range is unbounded.  A flat patch of faces gets a thin
+    box along its normal and a tight one across it, which prunes where the
+    axis-aligned box alone would not (a point over a tilted patch, or near
+    the center of a sphere).
+
+    The ranges of large trees are fitted on the threads; small ones, and
+    the first use of a mesh, do not compile the parallel loop.
+    """
+    if len(child) == 1:
+        # One leaf (brute force): the traversal goes straight to its
+        # primitives and never tests its bounds, which need only its box,
+        # the scale of the pruning tests; the slabs bound nothing.
+        bounds = np.zeros((1, NODE_COLUMNS))
+        bounds[0, 0:3] = cull[:, 0:3].min(axis=0)
+        bounds[0, 3:6] = cull[:, 3:6].max(axis=0)
+        bounds[0, 9::5] = -math.inf
+        bounds[0, 10::5] = math.inf
+        return bounds
+    bounds, start, end, tasks, whole = _refit_nodes(child, count, kinds, params, cull)
+    # Tasks differ in size by orders of magnitude: handed out one at a time.
+    with numba.parallel_chunksize(1):
+        fitter(len(kinds) >= GATHER_MIN)(bounds, tasks, whole, start, end, child, count, kinds, params, cull)
     return bounds
+
+
+def fitter(threads):
+    """:func:`_fit`, compiled with a parallel loop or (small trees) without."""
+    return specialize(_fit, "threads" if threads else "serial", parallel=threads)
 
 
 def _readonly(array, dtype):
@@ -1097,6 +1138,8 @@ def assemble(kinds, params, index, child, count, depth, cull=None):
     tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = _readonly(kinds, np.int8)
     params = _readonly(params, np.float64)
+    child = _readonly(child, np.int64)
+    count = _readonly(count, np.int64)
     tight_ro = _readonly(tight, np.float64)
     bounds = _readonly(refit(child, count, kinds, params, tight_ro), np.float64)
     if loose is tight:
@@ -1108,8 +1151,8 @@ def assemble(kinds, params, index, child, count, depth, cull=None):
         kinds=kinds,
         params=params,
         index=_readonly(index, np.int64),
-        child=_readonly(child, np.int64),
-        count=_readonly(count, np.int64),
+        child=child,
+        count=count,
         bounds=bounds,
         cull=tight_ro,
         loose_bounds=loose_bounds,
