@@ -56,6 +56,11 @@ of ``M``, the largest coordinate magnitude of the point and of every box:
   circles; ``certified`` is within an ulp; ``eberly``'s closest point on a
   triangle or a disk lies in the plane and the box up to the rounding of
   its coordinates;
+* before any primitive is asked, ``best`` is the distance to the closest
+  point found for the previous point (points are visited in spatial order,
+  so it is near): that point lies on its primitive up to the rounding of
+  its coordinates, so the primitive's computed distance exceeds it by a few
+  ``eps M`` at most;
 * ``SLACK`` is ``256 eps M``, several times the sum: a skipped primitive's
   computed distance exceeds ``best``, so even ties are visited, and the
   lowest index wins in both.
@@ -63,7 +68,8 @@ of ``M``, the largest coordinate magnitude of the point and of every box:
 ``eberly``'s circle is the exception: near the axis it takes the rim
 direction from rounding noise, so its closest point can leave the plane by
 up to ``R``.  For that method circles are bounded by the cube ``C +- R``
-and have no slab; the tree keeps a second set of boxes for it.
+and have no slab; the tree keeps a second set of boxes for it, and no
+previous closest point bounds the search.
 
 Certified
 ---------
@@ -120,6 +126,7 @@ _OUT_B = types.Array(types.boolean, 1, "C")
 TRIANGLE_QUERY = ROUND_QUERY = EVALUATE = INTERVAL = None
 EXACT_FALLBACK = False
 ROUNDS = True
+SEED_POINT = True
 
 
 def _evaluate(kinds, q, k, px, py, pz):
@@ -301,10 +308,10 @@ def _nearest_block(
     sentinel = index.shape[0]
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
-    # The previous point's nearest primitive, tried first: points are
-    # visited in spatial order, so it is close to the next point's, and
-    # the bound it gives prunes from the root down.
-    prev_k = -1
+    # The previous point's closest point, a point of the collection: points
+    # are visited in spatial order, so the distance to it is an upper bound
+    # on the next point's answer that prunes from the root down.
+    near_x, near_y, near_z = math.nan, math.nan, math.nan
     for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
         i = order[j]
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
@@ -320,16 +327,16 @@ def _nearest_block(
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
             s = _scale(px, py, pz, magnitude)
             qx, qy, qz = px * s, py * s, pz * s
-            reach = math.inf  # scaled distance beyond which primitives are skipped
-            limit = math.inf  # its square, for the boxes
+            cap = math.inf  # scaled upper bound on the answer
+            if SEED_POINT and not math.isnan(near_x):
+                dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
+                cap = math.sqrt(dx * dx + dy * dy + dz * dz)
+            reach = cap + SLACK  # scaled distance beyond which primitives are skipped
+            limit = reach * reach  # its square, for the boxes
             node = 0
             sp = 0
-            seed = prev_k
             while True:
-                if seed >= 0:
-                    first, c = seed, 1
-                else:
-                    first, c = child[node], count[node]
+                first, c = child[node], count[node]
                 if c > 0:
                     for k in range(first, first + c):
                         if _culled(cull, k, s, qx, qy, qz, reach):
@@ -353,10 +360,9 @@ def _nearest_block(
                                 w_feature = r[6]
                                 w_a0, w_a1, w_a2 = r[7], r[8], r[9]
                                 w_flag = r[10]
-                        reach = min(best, upper) * s + SLACK
+                        reach = min(min(best, upper) * s, cap) + SLACK
                         limit = reach * reach
-                    node = 0 if seed >= 0 else -1  # after the seed, the tree from its root
-                    seed = -1
+                    node = -1
                 else:
                     left = child[node]
                     right = left + 1
@@ -380,7 +386,8 @@ def _nearest_block(
                             break
                     if node < 0:
                         break
-        prev_k = best_k
+        if best_k >= 0:
+            near_x, near_y, near_z = w_x, w_y, w_z
         # An undecided answer could be the least (or tie with it): resolve
         # every candidate up to the bound exactly, outside the kernel.
         undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
@@ -1293,6 +1300,7 @@ def query_kernel(method, rounds):
         EVALUATE=evaluate,
         INTERVAL=interval,
         EXACT_FALLBACK=method.exact_fallback,
+        SEED_POINT=not method.loose,
     )
     loop = specialize(_nearest, "blocks", _QUERY_SIGNATURE, parallel=True)
     return functools.partial(loop, address(block, _BLOCK_SIGNATURE))
