@@ -558,74 +558,70 @@ def _morton_order(points):
 
 
 @inline
-def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax):
+def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax, bins):
     """Split node ``i`` (primitives ``child[i] .. + count[i]``, centroid bounds
     ``cmin[i]``, ``cmax[i]``) at its best binned SAH plane, into nodes
     ``first_child`` and ``first_child + 1``.
 
-    The rows of ``cen``, ``lo``, ``hi`` and ``order`` are partitioned in place
-    (each node's rows are contiguous), and the children's centroid bounds are
-    gathered on the way.
+    The centroids are binned along the longest axis of their bounds, in the
+    caller's work array ``bins`` ``(BINS, 9)``: a count, a box, and the
+    count and area right of each bin.  The rows of ``cen``, ``lo``, ``hi``
+    and ``order`` are partitioned in place (each node's rows are
+    contiguous), and the children's centroid bounds are gathered on the way.
     """
     start = child[i]
     cnt = count[i]
     end = start + cnt
-    bin_count = np.zeros((3, BINS), np.int64)
-    bin_lo = np.full((3, BINS, 3), math.inf)
-    bin_hi = np.full((3, BINS, 3), -math.inf)
-    scale = np.zeros(3)
-    longest = -1
+    axis = -1
     widest = 0.0
     for a in range(3):
         extent = cmax[i, a] - cmin[i, a]
         if extent > widest and extent < math.inf:
-            longest, widest = a, extent
-    if longest >= 0:
-        scale[longest] = BINS / widest
-    # Centroids are binned along the longest axis of their bounds alone.
-    for j in range(start, end):
-        for a in range(3):
-            if scale[a] == 0.0:
-                continue
-            b = min(int((cen[j, a] - cmin[i, a]) * scale[a]), BINS - 1)
-            bin_count[a, b] += 1
-            for c in range(3):
-                bin_lo[a, b, c] = min(bin_lo[a, b, c], lo[j, c])
-                bin_hi[a, b, c] = max(bin_hi[a, b, c], hi[j, c])
-    right_area = np.empty(BINS)
-    right_count = np.empty(BINS, np.int64)
-    best_cost = math.inf
+            axis, widest = a, extent
     best_axis = -1
     best_bin = 0
-    for a in range(3):
-        if scale[a] == 0.0:
-            continue
+    scale, origin = 0.0, 0.0
+    if axis >= 0:
+        scale = BINS / widest
+        origin = cmin[i, axis]
+        for b in range(BINS):
+            bins[b, 0] = 0.0
+            for c in range(3):
+                bins[b, 1 + c] = math.inf
+                bins[b, 4 + c] = -math.inf
+        for j in range(start, end):
+            b = min(int((cen[j, axis] - origin) * scale), BINS - 1)
+            bins[b, 0] += 1.0
+            for c in range(3):
+                bins[b, 1 + c] = min(bins[b, 1 + c], lo[j, c])
+                bins[b, 4 + c] = max(bins[b, 4 + c], hi[j, c])
         # Sweep from the right, then from the left, costing each plane
         # between bins b and b + 1 as area x count on either side.
         xl, yl, zl = math.inf, math.inf, math.inf
         xh, yh, zh = -math.inf, -math.inf, -math.inf
-        total = 0
+        total = 0.0
         for b in range(BINS - 1, 0, -1):
-            total += bin_count[a, b]
-            xl, yl, zl = min(xl, bin_lo[a, b, 0]), min(yl, bin_lo[a, b, 1]), min(zl, bin_lo[a, b, 2])
-            xh, yh, zh = max(xh, bin_hi[a, b, 0]), max(yh, bin_hi[a, b, 1]), max(zh, bin_hi[a, b, 2])
-            right_count[b] = total
+            total += bins[b, 0]
+            xl, yl, zl = min(xl, bins[b, 1]), min(yl, bins[b, 2]), min(zl, bins[b, 3])
+            xh, yh, zh = max(xh, bins[b, 4]), max(yh, bins[b, 5]), max(zh, bins[b, 6])
             dx, dy, dz = xh - xl, yh - yl, zh - zl
-            right_area[b] = dx * dy + dy * dz + dz * dx if total > 0 else 0.0
+            bins[b, 7] = total
+            bins[b, 8] = dx * dy + dy * dz + dz * dx if total > 0.0 else 0.0
         xl, yl, zl = math.inf, math.inf, math.inf
         xh, yh, zh = -math.inf, -math.inf, -math.inf
-        total = 0
+        total = 0.0
+        best_cost = math.inf
         for b in range(BINS - 1):
-            total += bin_count[a, b]
-            xl, yl, zl = min(xl, bin_lo[a, b, 0]), min(yl, bin_lo[a, b, 1]), min(zl, bin_lo[a, b, 2])
-            xh, yh, zh = max(xh, bin_hi[a, b, 0]), max(yh, bin_hi[a, b, 1]), max(zh, bin_hi[a, b, 2])
-            if total == 0 or right_count[b + 1] == 0:
+            total += bins[b, 0]
+            xl, yl, zl = min(xl, bins[b, 1]), min(yl, bins[b, 2]), min(zl, bins[b, 3])
+            xh, yh, zh = max(xh, bins[b, 4]), max(yh, bins[b, 5]), max(zh, bins[b, 6])
+            if total == 0.0 or bins[b + 1, 7] == 0.0:
                 continue
             dx, dy, dz = xh - xl, yh - yl, zh - zl
-            cost = (dx * dy + dy * dz + dz * dx) * total + right_area[b + 1] * right_count[b + 1]
+            cost = (dx * dy + dy * dz + dz * dx) * total + bins[b + 1, 8] * bins[b + 1, 7]
             if cost < best_cost:
                 best_cost = cost
-                best_axis = a
+                best_axis = axis
                 best_bin = b
     left = first_child
     right = first_child + 1
@@ -647,7 +643,7 @@ def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax):
         lo_j = start
         hi_j = end - 1
         while lo_j <= hi_j:
-            b = min(int((cen[lo_j, a] - cmin[i, a]) * scale[a]), BINS - 1)
+            b = min(int((cen[lo_j, a] - origin) * scale), BINS - 1)
             side = left if b <= best_bin else right
             for c in range(3):
                 cmin[side, c] = min(cmin[side, c], cen[lo_j, c])
@@ -721,9 +717,13 @@ def _build(boxes, leaf_size):
             if count[i] > leaf_size:
                 first_child[i] = n_nodes
                 n_nodes += 2
-        for i in prange(begin, end_level):
-            if count[i] > leaf_size:
-                _split(i, first_child[i], child, count, cen, lo, hi, order, cmin, cmax)
+        # In chunks of nodes, each with its own work array for the bins.
+        size = max((end_level - begin) // 16, 1)
+        for chunk in prange((end_level - begin + size - 1) // size):
+            bins = np.empty((BINS, 9))
+            for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
+                if count[i] > leaf_size:
+                    _split(i, first_child[i], child, count, cen, lo, hi, order, cmin, cmax, bins)
         begin = end_level
     return child[:n_nodes].copy(), count[:n_nodes].copy(), order, depth
 
@@ -1067,6 +1067,10 @@ def primitive_cull(kinds, params):
 GATHER_MIN = 1 << 15
 
 
+#: The size (in float64s) from which NumPy asks for transparent huge pages: 4 MiB.
+HUGE_PAGE_MIN = 1 << 19
+
+
 @kernel()
 def _empty(rows, columns):
     return np.empty((rows, columns))
@@ -1080,7 +1084,7 @@ def empty(rows, columns):
     kernel compacts memory to find them on demand, the first writes to
     such an array can stall for a quarter of a second.
     """
-    if rows * columns < GATHER_MIN:
+    if rows * columns < HUGE_PAGE_MIN:
         return np.empty((rows, columns))
     return _empty(rows, columns)
 
