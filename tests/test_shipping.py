@@ -62,6 +62,14 @@ def _forbid_building(monkeypatch):
         monkeypatch.setattr(bvh, name, built)
 
 
+def _assert_same_answers(shape, back, points):
+    """Every method's full answer of ``back`` is ``shape``'s, bit for bit."""
+    for method in shape.methods:
+        a, b = shape.closest_point(points, method=method), back.closest_point(points, method=method)
+        for name, value in vars(a).items():
+            np.testing.assert_array_equal(getattr(b, name), value, strict=True)
+
+
 @pytest.mark.parametrize("kind", list(collections()))
 def test_unpickled_collections_hold_the_same_tree_bit_for_bit_without_building_it(kind, monkeypatch):
     shape = collections()[kind]
@@ -76,11 +84,7 @@ def test_unpickled_collections_hold_the_same_tree_bit_for_bit_without_building_i
             assert not b.flags.writeable and b.flags.c_contiguous, field.name
         else:
             assert a == b, field.name
-    points = np.random.default_rng(2).normal(size=(2000, 3)) * 1.5
-    for method in shape.methods:
-        a, b = shape.closest_point(points, method=method), back.closest_point(points, method=method)
-        for name, value in vars(a).items():
-            np.testing.assert_array_equal(getattr(b, name), value, strict=True)
+    _assert_same_answers(shape, back, np.random.default_rng(2).normal(size=(2000, 3)) * 1.5)
 
 
 @pytest.mark.parametrize("kind", list(collections()))
@@ -97,11 +101,7 @@ def test_node_bounds_in_a_pickle_of_an_earlier_version_are_not_read(kind):
     back.__setstate__(state)
     for name in ("bounds", "loose_bounds", "child", "index"):
         assert getattr(back._tree, name).tobytes() == getattr(tree, name).tobytes(), name
-    points = np.random.default_rng(3).normal(size=(500, 3)) * 1.5
-    for method in shape.methods:
-        a, b = shape.closest_point(points, method=method), back.closest_point(points, method=method)
-        for name, value in vars(a).items():
-            np.testing.assert_array_equal(getattr(b, name), value, strict=True)
+    _assert_same_answers(shape, back, np.random.default_rng(3).normal(size=(500, 3)) * 1.5)
 
 
 @pytest.mark.parametrize("kind", list(collections()))
