@@ -19,8 +19,9 @@ Hierarchy
 Built once, on primitive boxes, by binned surface-area heuristic (``BINS``
 bins on the centroids along their longest axis, splitting until a node holds at most
 ``LEAF_SIZE`` primitives; nodes whose centroids coincide are cut in half by
-index).  Nodes are stored breadth first, so the children of a node are
-adjacent in memory.
+index).  The children of a node are adjacent in memory and come after it:
+the large nodes breadth first, then the subtree of each small one in a
+block of its own (see :func:`_build`).
 
 Pruning, and why it never changes the answer
 --------------------------------------------
@@ -558,24 +559,34 @@ def _morton_order(points):
 
 
 @inline
-def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax, bins):
-    """Split node ``i`` (primitives ``child[i] .. + count[i]``, centroid bounds
-    ``cmin[i]``, ``cmax[i]``) at its best binned SAH plane, into nodes
-    ``first_child`` and ``first_child + 1``.
+def _centroid(rows, j, a):
+    # Halves first: the sum of two coordinates near 1e308 would overflow.
+    return rows[j, a] * 0.5 + rows[j, 3 + a] * 0.5
 
-    The centroids are binned along the longest axis of their bounds, in the
-    caller's work array ``bins`` ``(BINS, 9)``: a count, a box, and the
-    count and area right of each bin.  The rows of ``cen``, ``lo``, ``hi``
-    and ``order`` are partitioned in place (each node's rows are
-    contiguous), and the children's centroid bounds are gathered on the way.
+
+@inline
+def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
+    """Split node ``i`` (primitives ``child[i] .. + count[i]``) at its best
+    binned SAH plane, into nodes ``first_child`` and ``first_child + 1``.
+    The centroid bounds of node ``k`` are row ``k - base`` of ``cmin`` and
+    ``cmax``.
+
+    ``rows`` holds each primitive's box in its first six columns (low and
+    high corners), and its centroid is the box's center.  The centroids are
+    binned along the longest axis of their bounds, in the caller's work
+    array ``bins`` ``(BINS, 9)``: a count, a box, and the count and area
+    right of each bin.  The rows of ``rows`` and ``order`` are partitioned
+    in place (each node's rows are contiguous), and the children's centroid
+    bounds are gathered on the way.
     """
     start = child[i]
     cnt = count[i]
     end = start + cnt
+    columns = rows.shape[1]
     axis = -1
     widest = 0.0
     for a in range(3):
-        extent = cmax[i, a] - cmin[i, a]
+        extent = cmax[i - base, a] - cmin[i - base, a]
         if extent > widest and extent < math.inf:
             axis, widest = a, extent
     best_axis = -1
@@ -583,18 +594,18 @@ def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax, bins):
     scale, origin = 0.0, 0.0
     if axis >= 0:
         scale = BINS / widest
-        origin = cmin[i, axis]
+        origin = cmin[i - base, axis]
         for b in range(BINS):
             bins[b, 0] = 0.0
             for c in range(3):
                 bins[b, 1 + c] = math.inf
                 bins[b, 4 + c] = -math.inf
         for j in range(start, end):
-            b = min(int((cen[j, axis] - origin) * scale), BINS - 1)
+            b = min(int((_centroid(rows, j, axis) - origin) * scale), BINS - 1)
             bins[b, 0] += 1.0
             for c in range(3):
-                bins[b, 1 + c] = min(bins[b, 1 + c], lo[j, c])
-                bins[b, 4 + c] = max(bins[b, 4 + c], hi[j, c])
+                bins[b, 1 + c] = min(bins[b, 1 + c], rows[j, c])
+                bins[b, 4 + c] = max(bins[b, 4 + c], rows[j, 3 + c])
         # Sweep from the right, then from the left, costing each plane
         # between bins b and b + 1 as area x count on either side.
         xl, yl, zl = math.inf, math.inf, math.inf
@@ -623,65 +634,132 @@ def _split(i, first_child, child, count, cen, lo, hi, order, cmin, cmax, bins):
                 best_cost = cost
                 best_axis = axis
                 best_bin = b
-    left = first_child
-    right = first_child + 1
-    for a in range(3):
-        cmin[left, a] = math.inf
-        cmax[left, a] = -math.inf
-        cmin[right, a] = math.inf
-        cmax[right, a] = -math.inf
+    # The children's centroid bounds, left (l) and right (r).
+    lx0, ly0, lz0, lx1, ly1, lz1 = math.inf, math.inf, math.inf, -math.inf, -math.inf, -math.inf
+    rx0, ry0, rz0, rx1, ry1, rz1 = math.inf, math.inf, math.inf, -math.inf, -math.inf, -math.inf
     if best_axis < 0:
         # Coincident centroids (or costs beyond the float range): halves by index.
         mid = start + cnt // 2
         for j in range(start, end):
-            side = left if j < mid else right
-            for a in range(3):
-                cmin[side, a] = min(cmin[side, a], cen[j, a])
-                cmax[side, a] = max(cmax[side, a], cen[j, a])
+            x, y, z = _centroid(rows, j, 0), _centroid(rows, j, 1), _centroid(rows, j, 2)
+            if j < mid:
+                lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
+                lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
+            else:
+                rx0, ry0, rz0 = min(rx0, x), min(ry0, y), min(rz0, z)
+                rx1, ry1, rz1 = max(rx1, x), max(ry1, y), max(rz1, z)
     else:
         a = best_axis
         lo_j = start
         hi_j = end - 1
         while lo_j <= hi_j:
-            b = min(int((cen[lo_j, a] - origin) * scale), BINS - 1)
-            side = left if b <= best_bin else right
-            for c in range(3):
-                cmin[side, c] = min(cmin[side, c], cen[lo_j, c])
-                cmax[side, c] = max(cmax[side, c], cen[lo_j, c])
-            if b <= best_bin:
+            x, y, z = _centroid(rows, lo_j, 0), _centroid(rows, lo_j, 1), _centroid(rows, lo_j, 2)
+            h = x if a == 0 else (y if a == 1 else z)
+            if min(int((h - origin) * scale), BINS - 1) <= best_bin:
+                lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
+                lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
                 lo_j += 1
             else:
+                rx0, ry0, rz0 = min(rx0, x), min(ry0, y), min(rz0, z)
+                rx1, ry1, rz1 = max(rx1, x), max(ry1, y), max(rz1, z)
                 # Swap rows lo_j and hi_j of every array kept in node order.
                 order[lo_j], order[hi_j] = order[hi_j], order[lo_j]
-                for c in range(3):
-                    cen[lo_j, c], cen[hi_j, c] = cen[hi_j, c], cen[lo_j, c]
-                    lo[lo_j, c], lo[hi_j, c] = lo[hi_j, c], lo[lo_j, c]
-                    hi[lo_j, c], hi[hi_j, c] = hi[hi_j, c], hi[lo_j, c]
+                for c in range(columns):
+                    rows[lo_j, c], rows[hi_j, c] = rows[hi_j, c], rows[lo_j, c]
                 hi_j -= 1
         mid = lo_j
-    child[left] = start
-    count[left] = mid - start
-    child[right] = mid
-    count[right] = end - mid
-    child[i] = left
+    left = first_child - base
+    right = first_child + 1 - base
+    cmin[left, 0], cmin[left, 1], cmin[left, 2] = lx0, ly0, lz0
+    cmax[left, 0], cmax[left, 1], cmax[left, 2] = lx1, ly1, lz1
+    cmin[right, 0], cmin[right, 1], cmin[right, 2] = rx0, ry0, rz0
+    cmax[right, 0], cmax[right, 1], cmax[right, 2] = rx1, ry1, rz1
+    child[first_child] = start
+    count[first_child] = mid - start
+    child[first_child + 1] = mid
+    count[first_child + 1] = end - mid
+    child[i] = first_child
     count[i] = 0
 
 
+#: Nodes over at most this many primitives are split subtree by subtree,
+#: while their rows are in cache, rather than one level of the tree at a time.
+BUILD_SUBTREE = 4096
+
+
+@inline
+def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size):
+    """Split node ``root`` and its descendants down to the leaves, breadth
+    first, into nodes ``root + 1`` on, whose centroid bounds are rows of
+    ``cmin``, ``cmax`` from ``root`` on.  Returns the number of nodes, the
+    root included, and the depth of the deepest leaf below the root."""
+    last = root + 1
+    level_end = root + 1
+    depth = 0
+    i = root
+    while i < last:
+        if i == level_end:
+            depth += 1
+            level_end = last
+        if count[i] > leaf_size:
+            _split(i, last, child, count, rows, order, cmin, cmax, root, bins)
+            last += 2
+        i += 1
+    return last - root, depth
+
+
+@inline
+def _subtree_task(i, child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size):
+    """:func:`_split_subtree` for node ``i`` of the level-by-level split, in
+    the block of nodes at twice its first row, with scratch bounds."""
+    base = 2 * child[i]
+    scratch_min = np.empty((2 * BUILD_SUBTREE, 3))
+    scratch_max = np.empty((2 * BUILD_SUBTREE, 3))
+    bins = np.empty((BINS, 9))
+    block_child[base] = child[i]
+    block_count[base] = count[i]
+    for a in range(3):
+        scratch_min[0, a] = cmin[i, a]
+        scratch_max[0, a] = cmax[i, a]
+    return _split_subtree(base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size)
+
+
+@inline
+def _number_block(i, nodes, offset, child, block_child, block_count, out_child, out_count):
+    """Copy node ``i``'s block of ``nodes`` nodes into the tree: block node
+    ``base + t`` is node ``offset + t - 1``, and the root keeps its number."""
+    base = 2 * child[i]
+    for t in range(nodes):
+        k = i if t == 0 else offset + t - 1
+        if block_count[base + t] == 0:
+            out_child[k] = offset + block_child[base + t] - base - 1
+            out_count[k] = 0
+        else:
+            out_child[k] = block_child[base + t]
+            out_count[k] = block_count[base + t]
+
+
 @kernel(parallel=True)
-def _build(boxes, leaf_size):
-    """Topology of a hierarchy over the boxes ``boxes[:, 0:3]`` (low
-    corners) and ``boxes[:, 3:6]`` (high corners), n >= 1 rows.
+def _build(rows, leaf_size):
+    """Topology of a hierarchy over the boxes ``rows[:, 0:3]`` (low corners)
+    and ``rows[:, 3:6]`` (high corners), n >= 1 rows, whose rows it puts in
+    leaf order (every column, in place).
 
     Returns ``(child, count, order, depth)``: the nodes as in
-    :func:`_nearest`, ``order[j]`` the primitive stored at position ``j``,
-    and the largest depth of a leaf.
+    :func:`_nearest`, ``order[j]`` the primitive now at row ``j``, and the
+    largest depth of a leaf.
 
-    Binned SAH, one level of the tree at a time: the nodes of a level are
-    split in parallel, each on its own contiguous rows, and the children of
-    a level's nodes are numbered in order after it (breadth first, so that a
-    node's children are adjacent and come after it).
+    Binned SAH.  Nodes over more than :data:`BUILD_SUBTREE` primitives are
+    split one level of the tree at a time, the nodes of a level in
+    parallel, each on its own contiguous rows, and numbered breadth first.
+    Each smaller node is then split down to its leaves as one task, in a
+    scratch block of nodes that its rows index (a node over rows ``s .. s +
+    c - 1`` has at most ``2 c - 1`` nodes in its subtree, so the block at
+    ``2 s`` is its own).  Its descendants are then numbered after the large
+    nodes, block after block: a node's children are adjacent and come after
+    it.
     """
-    n = boxes.shape[0]
+    n = rows.shape[0]
     cap = 2 * n - 1
     child = np.zeros(cap, np.int64)
     count = np.zeros(cap, np.int64)
@@ -689,32 +767,20 @@ def _build(boxes, leaf_size):
     cmin = np.empty((cap, 3))
     cmax = np.empty((cap, 3))
     order = np.arange(n)
-    # Rows in node order, moved along with ``order`` as nodes are split.
-    lo = np.empty((n, 3))
-    hi = np.empty((n, 3))
-    cen = np.empty((n, 3))
-    for j in prange(n):
-        for a in range(3):
-            lo[j, a] = boxes[j, a]
-            hi[j, a] = boxes[j, 3 + a]
-            # Halves first: the sum of two coordinates near 1e308 would overflow.
-            cen[j, a] = boxes[j, a] * 0.5 + boxes[j, 3 + a] * 0.5
     for a in range(3):
         cmin[0, a] = math.inf
         cmax[0, a] = -math.inf
     for j in range(n):
         for a in range(3):
-            cmin[0, a] = min(cmin[0, a], cen[j, a])
-            cmax[0, a] = max(cmax[0, a], cen[j, a])
+            cmin[0, a] = min(cmin[0, a], _centroid(rows, j, a))
+            cmax[0, a] = max(cmax[0, a], _centroid(rows, j, a))
     count[0] = n
     n_nodes = 1
     begin = 0
-    depth = -1
     while begin < n_nodes:
         end_level = n_nodes
-        depth += 1
         for i in range(begin, end_level):
-            if count[i] > leaf_size:
+            if count[i] > BUILD_SUBTREE:
                 first_child[i] = n_nodes
                 n_nodes += 2
         # In chunks of nodes, each with its own work array for the bins.
@@ -722,10 +788,48 @@ def _build(boxes, leaf_size):
         for chunk in prange((end_level - begin + size - 1) // size):
             bins = np.empty((BINS, 9))
             for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
-                if count[i] > leaf_size:
-                    _split(i, first_child[i], child, count, cen, lo, hi, order, cmin, cmax, bins)
+                if count[i] > BUILD_SUBTREE:
+                    _split(i, first_child[i], child, count, rows, order, cmin, cmax, 0, bins)
         begin = end_level
-    return child[:n_nodes].copy(), count[:n_nodes].copy(), order, depth
+    # The depth of each of those nodes (set from its parent's: an array
+    # filled by NumPy here would be a parallel loop that Numba may fuse
+    # with a later one of the same length), and the ones left to split.
+    level = np.empty(n_nodes, np.int64)
+    level[0] = 0
+    roots = np.empty(n_nodes, np.int64)
+    n_roots = 0
+    deepest = 0
+    for k in range(n_nodes):
+        if count[k] == 0:
+            level[child[k]] = level[k] + 1
+            level[child[k] + 1] = level[k] + 1
+        elif count[k] > leaf_size:
+            roots[n_roots] = k
+            n_roots += 1
+        else:
+            deepest = max(deepest, level[k])
+    block_child = np.empty(2 * n, np.int64)
+    block_count = np.empty(2 * n, np.int64)
+    nodes = np.empty(n_roots, np.int64)
+    below = np.empty(n_roots, np.int64)
+    for r in prange(n_roots):
+        made, levels = _subtree_task(roots[r], child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size)
+        nodes[r] = made
+        below[r] = levels
+    total = n_nodes
+    offset = np.empty(n_roots, np.int64)
+    for r in range(n_roots):
+        offset[r] = total
+        total += nodes[r] - 1
+        deepest = max(deepest, level[roots[r]] + below[r])
+    out_child = np.empty(total, np.int64)
+    out_count = np.empty(total, np.int64)
+    for k in range(n_nodes):
+        out_child[k] = child[k]
+        out_count[k] = count[k]
+    for r in prange(n_roots):
+        _number_block(roots[r], nodes[r], offset[r], child, block_child, block_count, out_child, out_count)
+    return out_child, out_count, order, deepest
 
 
 @inline
@@ -1128,18 +1232,6 @@ def triangle_params(vertices, faces):
     return params
 
 
-def _tree(kinds, params, order, child, count, depth, cull, index=None):
-    tight, loose = cull
-    if order is not None:
-        kinds = kinds[order]
-        params = take_rows(params, order)
-        ordered = take_rows(tight, order)
-        loose = ordered if loose is tight else take_rows(loose, order)
-        tight = ordered
-    index = np.arange(len(kinds)) if index is None else index
-    return assemble(kinds, params, index, child, count, depth, (tight, loose))
-
-
 def assemble(kinds, params, index, child, count, depth, cull=None):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
@@ -1237,8 +1329,7 @@ def brute(kinds, params):
     Tree
     """
     n = len(kinds)
-    cull = primitive_cull(kinds, params)
-    return _tree(kinds, params, None, _readonly([0], np.int64), _readonly([n], np.int64), 0, cull)
+    return assemble(kinds, params, np.arange(n), _readonly([0], np.int64), _readonly([n], np.int64), 0)
 
 
 def build(kinds, params, leaf_size=LEAF_SIZE):
@@ -1259,10 +1350,13 @@ def build(kinds, params, leaf_size=LEAF_SIZE):
     kept = np.flatnonzero(keep)
     if len(kept) < len(kinds):
         kinds, params = kinds[kept], take_rows(params, kept)
-    cull = primitive_cull(kinds, params)
-    child, count, order, depth = _build(_readonly(cull[0], np.float64), int(leaf_size))
+    tight, loose = primitive_cull(kinds, params)
+    # The build puts the rows of ``tight`` in leaf order; the others follow.
+    child, count, order, depth = _build(tight, int(leaf_size))
+    loose = tight if loose is tight else take_rows(loose, order)
     index = order if len(kept) == len(keep) else kept[order]
-    return _tree(kinds, params, order, child, count, depth, cull, index)
+    kinds, params = kinds[order], take_rows(params, order)
+    return assemble(kinds, params, index, child, count, depth, (tight, loose))
 
 
 #: Batches at least this large are queried in Morton order of the points.
