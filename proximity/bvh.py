@@ -892,91 +892,150 @@ def _ranges(bounds, i, first, last, kinds, params, cull):
         bounds[i, c + 1] = high if finite else math.inf
 
 
-#: Nodes over at most this many primitives have their slabs fitted subtree
-#: by subtree, while the subtree's primitives are in cache.
+#: Nodes over at most this many primitives are fitted subtree by subtree,
+#: while the subtree's primitives are in cache.
 REFIT_SUBTREE = 8192
 
 
-@kernel()
-def _refit_nodes(child, count, kinds, params, cull):
-    """:func:`refit`'s nodes with their boxes and frames, but no slab ranges.
+@inline
+def _rows(child, count, i):
+    """The stored primitives ``first .. last - 1`` under node ``i``."""
+    k = i
+    while count[k] == 0:
+        k = child[k]
+    first = child[k]
+    k = i
+    while count[k] == 0:
+        k = child[k] + 1
+    return first, child[k] + count[k]
 
-    Returns ``(bounds, start, end, tasks, whole)``: node ``i`` holds stored
-    primitives ``start[i] .. end[i] - 1``; the ranges are fitted by
-    :func:`_fit`, node by node for the nodes ``tasks[j]`` over more than
-    :data:`REFIT_SUBTREE` primitives, and for the whole subtree of the
-    others (``whole[j]``).
+
+@kernel()
+def _refit_top(child, count):
+    """The tasks of :func:`refit`: ``(top, tasks, start, end)``.
+
+    ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
+    a node before its children; ``tasks`` the roots of the subtrees below
+    them (the root itself when it is no larger).  ``start`` and ``end``
+    are arrays over every node, set here for the top nodes: node ``i``
+    holds stored primitives ``start[i] .. end[i] - 1``.
     """
     m = child.shape[0]
-    bounds = np.empty((m, NODE_COLUMNS))
     start = np.empty(m, np.int64)
     end = np.empty(m, np.int64)
-    normal = np.zeros((m, 3))
-    # Children come after their parent, so a backward sweep sees them first.
-    for i in range(m - 1, -1, -1):
+    top = np.empty(m, np.int64)
+    tasks = np.empty(m, np.int64)
+    stack = np.empty(m + 1, np.int64)
+    n_top = 0
+    n_tasks = 0
+    stack[0] = 0
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        i = stack[sp]
+        first, last = _rows(child, count, i)
+        if count[i] == 0 and last - first > REFIT_SUBTREE:
+            start[i], end[i] = first, last
+            top[n_top] = i
+            n_top += 1
+            stack[sp] = child[i] + 1
+            stack[sp + 1] = child[i]
+            sp += 2
+        else:
+            tasks[n_tasks] = i
+            n_tasks += 1
+    return top[:n_top].copy(), tasks[:n_tasks].copy(), start, end
+
+
+@inline
+def _merge(bounds, i, child):
+    """Node ``i``'s box and normal sum (columns 6-8), from its two children's."""
+    for a in range(3):
+        bounds[i, a] = math.inf
+        bounds[i, 3 + a] = -math.inf
+        bounds[i, 6 + a] = 0.0
+    for k in range(child[i], child[i] + 2):
         for a in range(3):
-            bounds[i, a] = math.inf
-            bounds[i, 3 + a] = -math.inf
+            bounds[i, a] = min(bounds[i, a], bounds[k, a])
+            bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
+            bounds[i, 6 + a] += bounds[k, 6 + a]
+
+
+@inline
+def _frame(bounds, i):
+    """Node ``i``'s axes from its normal sum: ``u`` the sum normalised and
+    shortened, ``v`` and ``w`` across it (:func:`_across`)."""
+    ux, uy, uz = bounds[i, 6], bounds[i, 7], bounds[i, 8]
+    length = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if length > 0.0 and length < math.inf:
+        shrink = (1.0 - 2.0**-40) / length
+        ux, uy, uz = ux * shrink, uy * shrink, uz * shrink
+    else:
+        ux, uy, uz = 0.0, 0.0, 0.0
+    vx, vy, vz, wx, wy, wz = _across(ux, uy, uz)
+    bounds[i, 6], bounds[i, 7], bounds[i, 8] = ux, uy, uz
+    bounds[i, 11], bounds[i, 12], bounds[i, 13] = vx, vy, vz
+    bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
+
+
+@inline
+def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull):
+    """Every node of the subtree at ``root``: boxes and normal sums from the
+    leaves up, then, but for ``root`` itself, its frame and slab ranges."""
+    nodes = np.empty(2 * REFIT_SUBTREE, np.int64)
+    stack = np.empty(2 * REFIT_SUBTREE, np.int64)
+    n = 0
+    stack[0] = root
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        i = stack[sp]
+        nodes[n] = i
+        n += 1
+        if count[i] == 0:
+            stack[sp] = child[i] + 1
+            stack[sp + 1] = child[i]
+            sp += 2
+    # A node comes before its descendants: backwards, they are done first.
+    for t in range(n - 1, -1, -1):
+        i = nodes[t]
         if count[i] > 0:
             start[i] = child[i]
             end[i] = child[i] + count[i]
+            for a in range(3):
+                bounds[i, a] = math.inf
+                bounds[i, 3 + a] = -math.inf
+                bounds[i, 6 + a] = 0.0
             for k in range(start[i], end[i]):
                 for a in range(3):
                     bounds[i, a] = min(bounds[i, a], cull[k, a])
                     bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
-                    normal[i, a] += cull[k, 6 + a]
+                    bounds[i, 6 + a] += cull[k, 6 + a]
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
-            for k in range(child[i], child[i] + 2):
-                for a in range(3):
-                    bounds[i, a] = min(bounds[i, a], bounds[k, a])
-                    bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
-                    normal[i, a] += normal[k, a]
-    tasks = np.empty(m, np.int64)
-    whole = np.empty(m, np.bool_)
-    n_tasks = 0
-    for i in range(m):
-        ux, uy, uz = normal[i, 0], normal[i, 1], normal[i, 2]
-        length = math.sqrt(ux * ux + uy * uy + uz * uz)
-        if length > 0.0 and length < math.inf:
-            shrink = (1.0 - 2.0**-40) / length
-            ux, uy, uz = ux * shrink, uy * shrink, uz * shrink
-        else:
-            ux, uy, uz = 0.0, 0.0, 0.0
-        vx, vy, vz, wx, wy, wz = _across(ux, uy, uz)
-        bounds[i, 6], bounds[i, 7], bounds[i, 8] = ux, uy, uz
-        bounds[i, 11], bounds[i, 12], bounds[i, 13] = vx, vy, vz
-        bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
-        if end[i] - start[i] > REFIT_SUBTREE:
-            tasks[n_tasks], whole[n_tasks] = i, False
-            n_tasks += 1
-            if count[i] == 0:
-                for k in range(child[i], child[i] + 2):
-                    if end[k] - start[k] <= REFIT_SUBTREE:
-                        tasks[n_tasks], whole[n_tasks] = k, True
-                        n_tasks += 1
-        elif i == 0:
-            tasks[n_tasks], whole[n_tasks] = i, True
-            n_tasks += 1
-    return bounds, start, end, tasks[:n_tasks], whole[:n_tasks]
+            _merge(bounds, i, child)
+    for t in range(1, n):
+        i = nodes[t]
+        _frame(bounds, i)
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull)
 
 
-def _fit(bounds, tasks, whole, start, end, child, count, kinds, params, cull):
-    """The slab ranges of each node ``tasks[j]``, and of its whole subtree
-    where ``whole[j]`` (compiled serial and parallel, see :func:`refit`)."""
+def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull):
+    """The bounds of every node (compiled serial and parallel, see :func:`refit`).
+
+    The subtrees at ``tasks`` are fitted one per task; then the boxes and
+    normal sums of the ``top`` nodes, children first; then the frames and
+    ranges of the top nodes and of the subtrees' roots, one per task.
+    """
     for j in prange(tasks.shape[0]):
-        stack = np.empty(REFIT_SUBTREE + 2, np.int64)
-        stack[0] = tasks[j]
-        sp = 1
-        while sp > 0:
-            sp -= 1
-            i = stack[sp]
-            _ranges(bounds, i, start[i], end[i], kinds, params, cull)
-            if whole[j] and count[i] == 0:
-                stack[sp] = child[i]
-                stack[sp + 1] = child[i] + 1
-                sp += 2
+        _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull)
+    for t in range(top.shape[0] - 1, -1, -1):
+        _merge(bounds, top[t], child)
+    for j in prange(top.shape[0] + tasks.shape[0]):
+        i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
+        _frame(bounds, i)
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull)
 
 
 def refit(child, count, kinds, params, cull):
@@ -993,8 +1052,8 @@ def refit(child, count, kinds, params, cull):
     axis-aligned box alone would not (a point over a tilted patch, or near
     the center of a sphere).
 
-    The ranges of large trees are fitted on the threads; small ones, and
-    the first use of a mesh, do not compile the parallel loop.
+    Large trees are fitted on the threads; small ones, and the first use of
+    a mesh, do not compile the parallel loops.
     """
     if len(child) == 1:
         # One leaf (brute force): the traversal goes straight to its
@@ -1006,10 +1065,11 @@ def refit(child, count, kinds, params, cull):
         bounds[0, 9::5] = -math.inf
         bounds[0, 10::5] = math.inf
         return bounds
-    bounds, start, end, tasks, whole = _refit_nodes(child, count, kinds, params, cull)
+    top, tasks, start, end = _refit_top(child, count)
+    bounds = empty(len(child), NODE_COLUMNS)
     # Tasks differ in size by orders of magnitude: handed out one at a time.
     with numba.parallel_chunksize(1):
-        fitter(len(kinds) >= GATHER_MIN)(bounds, tasks, whole, start, end, child, count, kinds, params, cull)
+        fitter(len(kinds) >= GATHER_MIN)(bounds, top, tasks, start, end, child, count, kinds, params, cull)
     return bounds
 
 

@@ -60,8 +60,8 @@ def _broad_phase():
     bvh._morton_order(points)
     # The slabs of large trees are fitted on the threads.
     nodes = (tree.child, tree.count, tree.kinds, tree.params, tree.cull)
-    bounds, start, end, tasks, whole = bvh._refit_nodes(*nodes)
-    bvh.fitter(True)(bounds, tasks, whole, start, end, *nodes)
+    top, tasks, start, end = bvh._refit_top(tree.child, tree.count)
+    bvh.fitter(True)(bvh.empty(len(tree.child), bvh.NODE_COLUMNS), top, tasks, start, end, *nodes)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
