@@ -917,8 +917,8 @@ def _refit_top(child, count):
     ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
     a node before its children; ``tasks`` the roots of the subtrees below
     them (the root itself when it is no larger).  ``start`` and ``end``
-    are arrays over every node, set here for the top nodes: node ``i``
-    holds stored primitives ``start[i] .. end[i] - 1``.
+    are arrays over every node, set here for those: node ``i`` holds
+    stored primitives ``start[i] .. end[i] - 1``.
     """
     m = child.shape[0]
     start = np.empty(m, np.int64)
@@ -934,8 +934,8 @@ def _refit_top(child, count):
         sp -= 1
         i = stack[sp]
         first, last = _rows(child, count, i)
+        start[i], end[i] = first, last
         if count[i] == 0 and last - first > REFIT_SUBTREE:
-            start[i], end[i] = first, last
             top[n_top] = i
             n_top += 1
             stack[sp] = child[i] + 1
@@ -982,8 +982,9 @@ def _frame(bounds, i):
 def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull):
     """Every node of the subtree at ``root``: boxes and normal sums from the
     leaves up, then, but for ``root`` itself, its frame and slab ranges."""
-    nodes = np.empty(2 * REFIT_SUBTREE, np.int64)
-    stack = np.empty(2 * REFIT_SUBTREE, np.int64)
+    # A subtree over c primitives has at most 2 c - 1 nodes.
+    nodes = np.empty(2 * (end[root] - start[root]), np.int64)
+    stack = np.empty(2 * (end[root] - start[root]), np.int64)
     n = 0
     stack[0] = root
     sp = 1
@@ -1021,8 +1022,9 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull):
         _ranges(bounds, i, start[i], end[i], kinds, params, cull)
 
 
+@kernel(parallel=True)
 def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull):
-    """The bounds of every node (compiled serial and parallel, see :func:`refit`).
+    """The bounds of every node (see :func:`refit`).
 
     The subtrees at ``tasks`` are fitted one per task; then the boxes and
     normal sums of the ``top`` nodes, children first; then the frames and
@@ -1052,8 +1054,7 @@ def refit(child, count, kinds, params, cull):
     axis-aligned box alone would not (a point over a tilted patch, or near
     the center of a sphere).
 
-    Large trees are fitted on the threads; small ones, and the first use of
-    a mesh, do not compile the parallel loops.
+    The subtrees, and the nodes above them, are fitted on the threads.
     """
     if len(child) == 1:
         # One leaf (brute force): the traversal goes straight to its
@@ -1069,13 +1070,8 @@ def refit(child, count, kinds, params, cull):
     bounds = empty(len(child), NODE_COLUMNS)
     # Tasks differ in size by orders of magnitude: handed out one at a time.
     with numba.parallel_chunksize(1):
-        fitter(len(kinds) >= GATHER_MIN)(bounds, top, tasks, start, end, child, count, kinds, params, cull)
+        _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull)
     return bounds
-
-
-def fitter(threads):
-    """:func:`_fit`, compiled with a parallel loop or (small trees) without."""
-    return specialize(_fit, "threads" if threads else "serial", parallel=threads)
 
 
 def _readonly(array, dtype):
@@ -1227,7 +1223,9 @@ def primitive_cull(kinds, params):
     return cull, loose
 
 
-#: From this many rows on, rows are gathered by a compiled parallel loop.
+#: From this many rows on, rows are gathered by compiled parallel loops.
+#: Each is a kernel to compile, or load from the cache, at its first call
+#: in a process (about 2 ms), which smaller meshes do without.
 GATHER_MIN = 1 << 15
 
 
@@ -1284,8 +1282,10 @@ def triangle_params(vertices, faces):
     """The parameters ``(F, 10)`` of the triangles ``faces`` of ``vertices``:
     each face's nine coordinates, then a zero."""
     if len(faces) < GATHER_MIN:
-        params = np.zeros((len(faces), N_PARAMS))
-        params[:, :9] = vertices[faces].reshape(-1, 9)
+        params = np.empty((len(faces), N_PARAMS))
+        # Gathered straight into the rows; the faces index the vertices.
+        np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
+        params[:, 9] = 0.0
         return params
     params = empty(len(faces), N_PARAMS)
     _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), params)

@@ -58,10 +58,6 @@ def _broad_phase():
     bvh._triangle_params(vertices, faces, np.empty((1, 10)))
     points = bvh._readonly(rng.random((2, 3)), np.float64)
     bvh._morton_order(points)
-    # The slabs of large trees are fitted on the threads.
-    nodes = (tree.child, tree.count, tree.kinds, tree.params, tree.cull)
-    top, tasks, start, end = bvh._refit_top(tree.child, tree.count)
-    bvh.fitter(True)(bvh.empty(len(tree.child), bvh.NODE_COLUMNS), top, tasks, start, end, *nodes)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
