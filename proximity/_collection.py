@@ -34,16 +34,25 @@ class Collection(Frozen):
     dim = 3
 
     @staticmethod
-    def _tree_for(kinds, params, broad_phase):
-        """``(resolved broad phase, tree)`` for primitives ``kinds``, ``params``."""
+    def _tree_for(broad_phase, n, primitives):
+        """``(resolved broad phase, tree)`` for ``n`` primitives.
+
+        ``primitives(hierarchy)`` gives ``(kinds, params, rows)`` for a
+        hierarchy (``rows`` as :func:`proximity.bvh.build` takes them, or
+        None) or for brute force.
+        """
         if broad_phase not in BROAD_PHASES:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
         if broad_phase == "auto":
-            broad_phase = "brute" if len(kinds) <= BRUTE_FORCE_MAX else "bvh"
+            broad_phase = "brute" if n <= BRUTE_FORCE_MAX else "bvh"
         with _threads.kernel():
             from . import bvh
 
-            tree = bvh.build(kinds, params) if broad_phase == "bvh" else bvh.brute(kinds, params)
+            kinds, params, rows = primitives(broad_phase == "bvh")
+            if broad_phase == "bvh":
+                tree = bvh.build(kinds, params, rows=rows)
+            else:
+                tree = bvh.brute(kinds, params)
         return broad_phase, tree
 
     # Pickling.  The tree's primitive data are copies of the collection's own

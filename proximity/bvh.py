@@ -1152,32 +1152,37 @@ def _slab(u, points):
     return np.where(ok, h.min(axis=1), -np.inf), np.where(ok, h.max(axis=1), np.inf)
 
 
+@inline
+def _triangle_row(params, k, cull):
+    """Row ``k`` of :func:`primitive_cull` for a triangle: its box, and the
+    slab of its normal shortened as :func:`_shorter_than_one` does."""
+    for a in range(3):
+        cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
+        cull[k, 3 + a] = max(max(params[k, a], params[k, 3 + a]), params[k, 6 + a])
+    ex, ey, ez = params[k, 3] - params[k, 0], params[k, 4] - params[k, 1], params[k, 5] - params[k, 2]
+    fx, fy, fz = params[k, 6] - params[k, 0], params[k, 7] - params[k, 1], params[k, 8] - params[k, 2]
+    nx, ny, nz = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
+    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+    shrink = (1.0 - 2.0**-40) / length if length > 0.0 else 0.0
+    ux, uy, uz = nx * shrink, ny * shrink, nz * shrink
+    if not (math.isfinite(ux) and math.isfinite(uy) and math.isfinite(uz)):
+        ux, uy, uz = 0.0, 0.0, 0.0
+    low, high = math.inf, -math.inf
+    for v in range(3):
+        h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
+        low, high = min(low, h), max(high, h)
+    if not (math.isfinite(low) and math.isfinite(high)):
+        low, high = -math.inf, math.inf
+    cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
+    cull[k, 9], cull[k, 10] = low, high
+
+
 @kernel()
 def _triangle_cull(kinds, params, cull):
-    """:func:`primitive_cull` for the triangles: their box, and the slab of
-    their normal shortened as :func:`_shorter_than_one` does."""
+    """:func:`primitive_cull` for the triangles."""
     for k in range(kinds.shape[0]):
-        if kinds[k] != TRIANGLE:
-            continue
-        for a in range(3):
-            cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
-            cull[k, 3 + a] = max(max(params[k, a], params[k, 3 + a]), params[k, 6 + a])
-        ex, ey, ez = params[k, 3] - params[k, 0], params[k, 4] - params[k, 1], params[k, 5] - params[k, 2]
-        fx, fy, fz = params[k, 6] - params[k, 0], params[k, 7] - params[k, 1], params[k, 8] - params[k, 2]
-        nx, ny, nz = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
-        length = math.sqrt(nx * nx + ny * ny + nz * nz)
-        shrink = (1.0 - 2.0**-40) / length if length > 0.0 else 0.0
-        ux, uy, uz = nx * shrink, ny * shrink, nz * shrink
-        if not (math.isfinite(ux) and math.isfinite(uy) and math.isfinite(uz)):
-            ux, uy, uz = 0.0, 0.0, 0.0
-        low, high = math.inf, -math.inf
-        for v in range(3):
-            h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
-            low, high = min(low, h), max(high, h)
-        if not (math.isfinite(low) and math.isfinite(high)):
-            low, high = -math.inf, math.inf
-        cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
-        cull[k, 9], cull[k, 10] = low, high
+        if kinds[k] == TRIANGLE:
+            _triangle_row(params, k, cull)
 
 
 def primitive_cull(kinds, params):
@@ -1324,8 +1329,8 @@ def assemble(kinds, params, index, child, count, depth, cull=None):
     )
 
 
-@kernel()
-def _row_hashes(kinds, bits):
+@inline
+def _row_hash(kind, bits, k):
     """A 64-bit hash of each primitive's kind and parameter bits.
 
     Each word is mixed in by a multiplication, which carries low bits up,
@@ -1333,18 +1338,60 @@ def _row_hashes(kinds, bits):
     alone leaves the hash's low bits blind to the words' high bits, where
     floats that differ mostly differ.
     """
+    x = np.uint64(kind)
+    for c in range(bits.shape[1]):
+        x = (x ^ bits[k, c]) * np.uint64(0x9E3779B97F4A7C15)
+        x ^= x >> np.uint64(32)
+    return x
+
+
+@kernel()
+def _row_hashes(kinds, bits):
+    """A 64-bit hash of each primitive's kind and parameter bits (:func:`_row_hash`)."""
     n = bits.shape[0]
     h = np.empty(n, np.uint64)
     for k in range(n):
-        x = np.uint64(kinds[k])
-        for c in range(bits.shape[1]):
-            x = (x ^ bits[k, c]) * np.uint64(0x9E3779B97F4A7C15)
-            x ^= x >> np.uint64(32)
-        h[k] = x
+        h[k] = _row_hash(kinds[k], bits, k)
     return h
 
 
-def distinct(kinds, params):
+@inline
+def _face_row(vertices, faces, k, params, bits, cull, hashes):
+    for v in range(3):
+        i = faces[k, v]
+        for a in range(3):
+            params[k, 3 * v + a] = vertices[i, a]
+    params[k, 9] = 0.0
+    _triangle_row(params, k, cull)
+    hashes[k] = _row_hash(TRIANGLE, bits, k)
+
+
+@kernel(parallel=True)
+def _face_rows(vertices, faces, params, cull, hashes):
+    """:func:`triangle_params`, :func:`primitive_cull` and :func:`_row_hashes`
+    of a mesh's faces in one pass, on the threads for large meshes."""
+    bits = params.view(np.uint64)
+    if faces.shape[0] < GATHER_MIN:
+        for k in range(faces.shape[0]):
+            _face_row(vertices, faces, k, params, bits, cull, hashes)
+    else:
+        for k in prange(faces.shape[0]):
+            _face_row(vertices, faces, k, params, bits, cull, hashes)
+
+
+def face_rows(vertices, faces):
+    """``(kinds, params, cull, hashes)`` of the triangles ``faces`` of
+    ``vertices``: what :func:`build` computes from ``kinds`` and ``params``,
+    in one pass over the faces (which must index the vertices)."""
+    n = len(faces)
+    params = empty(n, N_PARAMS)
+    cull = empty(n, 11)
+    hashes = np.empty(n, np.uint64)
+    _face_rows(_readonly(vertices, np.float64), _readonly(faces, np.int64), params, cull, hashes)
+    return np.zeros(n, np.int8), params, cull, hashes
+
+
+def distinct(kinds, params, hashes=None):
     """Which primitives to store: all but exact copies (the same kind and the
     same bits) of a primitive with a lower index.
 
@@ -1355,7 +1402,7 @@ def distinct(kinds, params):
     """
     n = len(kinds)
     bits = params.view(np.uint64)
-    h = _row_hashes(kinds, bits)
+    h = _row_hashes(kinds, bits) if hashes is None else hashes
     keep = np.ones(n, np.bool_)
     # Distinct hashes, the usual case, are seen by a sort of the hashes
     # alone, several times faster than the stable sort of their order.
@@ -1392,7 +1439,7 @@ def brute(kinds, params):
     return assemble(kinds, params, np.arange(n), _readonly([0], np.int64), _readonly([n], np.int64), 0)
 
 
-def build(kinds, params, leaf_size=LEAF_SIZE):
+def build(kinds, params, leaf_size=LEAF_SIZE, rows=None):
     """A bounding-volume hierarchy over the primitives, built once.
 
     Parameters
@@ -1401,16 +1448,28 @@ def build(kinds, params, leaf_size=LEAF_SIZE):
     params : ndarray of float64, shape ``(n, 10)``
     leaf_size : int
         Most primitives a leaf holds.
+    rows : tuple, optional
+        ``(cull, hashes)`` of triangles alone, from :func:`face_rows`: the
+        rows of :func:`primitive_cull` (which the build reorders in place)
+        and :func:`_row_hashes`.
 
     Returns
     -------
     Tree
     """
-    keep = distinct(kinds, params)
+    if rows is None:
+        hashes = None
+    else:
+        tight, hashes = rows
+    keep = distinct(kinds, params, hashes)
     kept = np.flatnonzero(keep)
     if len(kept) < len(kinds):
         kinds, params = kinds[kept], take_rows(params, kept)
-    tight, loose = primitive_cull(kinds, params)
+        rows = None
+    if rows is None:
+        tight, loose = primitive_cull(kinds, params)
+    else:
+        loose = tight
     # The build puts the rows of ``tight`` in leaf order; the others follow.
     child, count, order, depth = _build(tight, int(leaf_size))
     loose = tight if loose is tight else take_rows(loose, order)

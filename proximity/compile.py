@@ -56,6 +56,7 @@ def _broad_phase():
     bvh._take_rows(bvh._readonly(params, np.float64), bvh._readonly([1, 0], np.int64), np.empty((2, 10)))
     vertices, faces = bvh._readonly(params[:, :3], np.float64), bvh._readonly([[0, 1, 2]], np.int64)
     bvh._triangle_params(vertices, faces, np.empty((1, 10)))
+    bvh.face_rows(vertices, faces)
     points = bvh._readonly(rng.random((2, 3)), np.float64)
     bvh._morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
