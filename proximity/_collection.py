@@ -34,13 +34,10 @@ class Collection(Frozen):
     dim = 3
 
     @staticmethod
-    def _tree_for(broad_phase, n, primitives):
-        """``(resolved broad phase, tree)`` for ``n`` primitives.
-
-        ``primitives(hierarchy)`` gives ``(kinds, params, rows)`` for a
-        hierarchy (``rows`` as :func:`proximity.bvh.build` takes them, or
-        None) or for brute force.
-        """
+    def _tree_for(broad_phase, n, build, brute):
+        """``(resolved broad phase, tree)`` for ``n`` primitives, from the
+        callables ``build(bvh)`` (a hierarchy) or ``brute(bvh)``, given the
+        module :mod:`proximity.bvh`."""
         if broad_phase not in BROAD_PHASES:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
         if broad_phase == "auto":
@@ -48,11 +45,7 @@ class Collection(Frozen):
         with _threads.kernel():
             from . import bvh
 
-            kinds, params, rows = primitives(broad_phase == "bvh")
-            if broad_phase == "bvh":
-                tree = bvh.build(kinds, params, rows=rows)
-            else:
-                tree = bvh.brute(kinds, params)
+            tree = build(bvh) if broad_phase == "bvh" else brute(bvh)
         return broad_phase, tree
 
     # Pickling.  The tree's primitive data are copies of the collection's own

@@ -1153,24 +1153,26 @@ def _slab(u, points):
 
 
 @inline
-def _triangle_row(params, k, cull):
-    """Row ``k`` of :func:`primitive_cull` for a triangle: its box, and the
-    slab of its normal shortened as :func:`_shorter_than_one` does."""
-    for a in range(3):
-        cull[k, a] = min(min(params[k, a], params[k, 3 + a]), params[k, 6 + a])
-        cull[k, 3 + a] = max(max(params[k, a], params[k, 3 + a]), params[k, 6 + a])
-    ex, ey, ez = params[k, 3] - params[k, 0], params[k, 4] - params[k, 1], params[k, 5] - params[k, 2]
-    fx, fy, fz = params[k, 6] - params[k, 0], params[k, 7] - params[k, 1], params[k, 8] - params[k, 2]
+def _triangle_row(cull, k, x0, y0, z0, x1, y1, z1, x2, y2, z2):
+    """Row ``k`` of :func:`primitive_cull` for the triangle of these
+    vertices: its box, and the slab of its normal shortened as
+    :func:`_shorter_than_one` does."""
+    cull[k, 0], cull[k, 3] = min(min(x0, x1), x2), max(max(x0, x1), x2)
+    cull[k, 1], cull[k, 4] = min(min(y0, y1), y2), max(max(y0, y1), y2)
+    cull[k, 2], cull[k, 5] = min(min(z0, z1), z2), max(max(z0, z1), z2)
+    ex, ey, ez = x1 - x0, y1 - y0, z1 - z0
+    fx, fy, fz = x2 - x0, y2 - y0, z2 - z0
     nx, ny, nz = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     shrink = (1.0 - 2.0**-40) / length if length > 0.0 else 0.0
     ux, uy, uz = nx * shrink, ny * shrink, nz * shrink
     if not (math.isfinite(ux) and math.isfinite(uy) and math.isfinite(uz)):
         ux, uy, uz = 0.0, 0.0, 0.0
-    low, high = math.inf, -math.inf
-    for v in range(3):
-        h = ux * params[k, 3 * v] + uy * params[k, 3 * v + 1] + uz * params[k, 3 * v + 2]
-        low, high = min(low, h), max(high, h)
+    h0 = ux * x0 + uy * y0 + uz * z0
+    h1 = ux * x1 + uy * y1 + uz * z1
+    h2 = ux * x2 + uy * y2 + uz * z2
+    low = min(min(min(math.inf, h0), h1), h2)
+    high = max(max(max(-math.inf, h0), h1), h2)
     if not (math.isfinite(low) and math.isfinite(high)):
         low, high = -math.inf, math.inf
     cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
@@ -1182,7 +1184,8 @@ def _triangle_cull(kinds, params, cull):
     """:func:`primitive_cull` for the triangles."""
     for k in range(kinds.shape[0]):
         if kinds[k] == TRIANGLE:
-            _triangle_row(params, k, cull)
+            p = params[k]
+            _triangle_row(cull, k, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
 
 
 def primitive_cull(kinds, params):
@@ -1273,27 +1276,43 @@ def take_rows(source, rows):
     return out
 
 
+#: From this many faces on, the passes over a mesh's faces run on the threads.
+FACES_PARALLEL = 1 << 12
+
+
+@inline
+def _face_params(vertices, faces, order, params, j):
+    k = order[j]
+    for v in range(3):
+        i = faces[k, v]
+        for a in range(3):
+            params[j, 3 * v + a] = vertices[i, a]
+    params[j, 9] = 0.0
+
+
 @kernel(parallel=True)
-def _triangle_params(vertices, faces, params):
-    for k in prange(faces.shape[0]):
-        for v in range(3):
-            i = faces[k, v]
-            for a in range(3):
-                params[k, 3 * v + a] = vertices[i, a]
-        params[k, 9] = 0.0
+def _triangle_params(vertices, faces, order, params):
+    if order.shape[0] < FACES_PARALLEL:
+        for j in range(order.shape[0]):
+            _face_params(vertices, faces, order, params, j)
+    else:
+        for j in prange(order.shape[0]):
+            _face_params(vertices, faces, order, params, j)
 
 
-def triangle_params(vertices, faces):
-    """The parameters ``(F, 10)`` of the triangles ``faces`` of ``vertices``:
-    each face's nine coordinates, then a zero."""
-    if len(faces) < GATHER_MIN:
+def triangle_params(vertices, faces, order=None):
+    """The parameters ``(F, 10)`` of the triangles ``faces`` of ``vertices``
+    (those ``faces[order]``, if given): each face's nine coordinates, then
+    a zero."""
+    if order is None and len(faces) < GATHER_MIN:
         params = np.empty((len(faces), N_PARAMS))
         # Gathered straight into the rows; the faces index the vertices.
         np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
         params[:, 9] = 0.0
         return params
-    params = empty(len(faces), N_PARAMS)
-    _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), params)
+    order = np.arange(len(faces)) if order is None else order
+    params = empty(len(order), N_PARAMS)
+    _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), _readonly(order, np.int64), params)
     return params
 
 
@@ -1330,68 +1349,63 @@ def assemble(kinds, params, index, child, count, depth, cull=None):
 
 
 @inline
-def _row_hash(kind, bits, k):
-    """A 64-bit hash of each primitive's kind and parameter bits.
-
-    Each word is mixed in by a multiplication, which carries low bits up,
-    and a shift, which brings the high bits down again: a multiplication
-    alone leaves the hash's low bits blind to the words' high bits, where
-    floats that differ mostly differ.
-    """
-    x = np.uint64(kind)
-    for c in range(bits.shape[1]):
-        x = (x ^ bits[k, c]) * np.uint64(0x9E3779B97F4A7C15)
-        x ^= x >> np.uint64(32)
-    return x
+def _mix(x, word):
+    """``x`` with the 64-bit ``word`` mixed in: by a multiplication, which
+    carries low bits up, and a shift, which brings the high bits down again
+    (a multiplication alone leaves the hash's low bits blind to the words'
+    high bits, where floats that differ mostly differ)."""
+    x = (x ^ word) * np.uint64(0x9E3779B97F4A7C15)
+    return x ^ (x >> np.uint64(32))
 
 
 @kernel()
 def _row_hashes(kinds, bits):
-    """A 64-bit hash of each primitive's kind and parameter bits (:func:`_row_hash`)."""
+    """A 64-bit hash of each primitive's kind and parameter bits."""
     n = bits.shape[0]
     h = np.empty(n, np.uint64)
     for k in range(n):
-        h[k] = _row_hash(kinds[k], bits, k)
+        x = np.uint64(kinds[k])
+        for c in range(bits.shape[1]):
+            x = _mix(x, bits[k, c])
+        h[k] = x
     return h
 
 
 @inline
-def _face_row(vertices, faces, k, params, bits, cull, hashes):
+def _face_row(vertices, bits, faces, k, cull, hashes):
+    i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
+    _triangle_row(
+        cull, k, vertices[i, 0], vertices[i, 1], vertices[i, 2], vertices[j, 0], vertices[j, 1],
+        vertices[j, 2], vertices[m, 0], vertices[m, 1], vertices[m, 2],
+    )  # fmt: skip
+    # The hash of the face's parameters (kind 0, nine coordinates, a zero).
+    x = np.uint64(TRIANGLE)
     for v in range(3):
-        i = faces[k, v]
         for a in range(3):
-            params[k, 3 * v + a] = vertices[i, a]
-    params[k, 9] = 0.0
-    _triangle_row(params, k, cull)
-    hashes[k] = _row_hash(TRIANGLE, bits, k)
+            x = _mix(x, bits[faces[k, v], a])
+    hashes[k] = _mix(x, np.uint64(0))
 
 
 @kernel(parallel=True)
-def _face_rows(vertices, faces, params, cull, hashes):
-    """:func:`triangle_params`, :func:`primitive_cull` and :func:`_row_hashes`
-    of a mesh's faces in one pass, on the threads for large meshes."""
-    bits = params.view(np.uint64)
-    if faces.shape[0] < GATHER_MIN:
+def _face_rows(vertices, faces, cull, hashes):
+    """:func:`primitive_cull` and :func:`_row_hashes` of the triangles
+    ``faces`` of ``vertices``, in one pass over the faces."""
+    bits = vertices.view(np.uint64)
+    if faces.shape[0] < FACES_PARALLEL:
         for k in range(faces.shape[0]):
-            _face_row(vertices, faces, k, params, bits, cull, hashes)
+            _face_row(vertices, bits, faces, k, cull, hashes)
     else:
         for k in prange(faces.shape[0]):
-            _face_row(vertices, faces, k, params, bits, cull, hashes)
+            _face_row(vertices, bits, faces, k, cull, hashes)
 
 
-def face_rows(vertices, faces):
-    """``(kinds, params, cull, hashes)`` of the triangles ``faces`` of
-    ``vertices``: what :func:`build` computes from ``kinds`` and ``params``,
-    in one pass over the faces (which must index the vertices)."""
-    n = len(faces)
-    params = empty(n, N_PARAMS)
-    cull = empty(n, 11)
-    hashes = np.empty(n, np.uint64)
-    _face_rows(_readonly(vertices, np.float64), _readonly(faces, np.int64), params, cull, hashes)
-    return np.zeros(n, np.int8), params, cull, hashes
+def _all_different(hashes):
+    """Whether the hashes, which it sorts in place, are all different."""
+    hashes.sort()
+    return len(hashes) < 2 or bool((hashes[1:] != hashes[:-1]).all())
 
 
-def distinct(kinds, params, hashes=None):
+def distinct(kinds, params):
     """Which primitives to store: all but exact copies (the same kind and the
     same bits) of a primitive with a lower index.
 
@@ -1402,13 +1416,12 @@ def distinct(kinds, params, hashes=None):
     """
     n = len(kinds)
     bits = params.view(np.uint64)
-    h = _row_hashes(kinds, bits) if hashes is None else hashes
     keep = np.ones(n, np.bool_)
     # Distinct hashes, the usual case, are seen by a sort of the hashes
     # alone, several times faster than the stable sort of their order.
-    sorted_h = np.sort(h)
-    if n < 2 or (sorted_h[1:] != sorted_h[:-1]).all():
+    if _all_different(_row_hashes(kinds, bits)):
         return keep
+    h = _row_hashes(kinds, bits)
     order = np.argsort(h, kind="stable")
     sorted_h = h[order]
     starts = np.concatenate([[True], sorted_h[1:] != sorted_h[:-1]])
@@ -1439,7 +1452,7 @@ def brute(kinds, params):
     return assemble(kinds, params, np.arange(n), _readonly([0], np.int64), _readonly([n], np.int64), 0)
 
 
-def build(kinds, params, leaf_size=LEAF_SIZE, rows=None):
+def build(kinds, params, leaf_size=LEAF_SIZE):
     """A bounding-volume hierarchy over the primitives, built once.
 
     Parameters
@@ -1448,34 +1461,41 @@ def build(kinds, params, leaf_size=LEAF_SIZE, rows=None):
     params : ndarray of float64, shape ``(n, 10)``
     leaf_size : int
         Most primitives a leaf holds.
-    rows : tuple, optional
-        ``(cull, hashes)`` of triangles alone, from :func:`face_rows`: the
-        rows of :func:`primitive_cull` (which the build reorders in place)
-        and :func:`_row_hashes`.
 
     Returns
     -------
     Tree
     """
-    if rows is None:
-        hashes = None
-    else:
-        tight, hashes = rows
-    keep = distinct(kinds, params, hashes)
+    keep = distinct(kinds, params)
     kept = np.flatnonzero(keep)
     if len(kept) < len(kinds):
         kinds, params = kinds[kept], take_rows(params, kept)
-        rows = None
-    if rows is None:
-        tight, loose = primitive_cull(kinds, params)
-    else:
-        loose = tight
+    tight, loose = primitive_cull(kinds, params)
     # The build puts the rows of ``tight`` in leaf order; the others follow.
     child, count, order, depth = _build(tight, int(leaf_size))
     loose = tight if loose is tight else take_rows(loose, order)
     index = order if len(kept) == len(keep) else kept[order]
     kinds, params = kinds[order], take_rows(params, order)
     return assemble(kinds, params, index, child, count, depth, (tight, loose))
+
+
+def build_mesh(vertices, faces, leaf_size=LEAF_SIZE):
+    """:func:`build` for the triangles ``faces`` of ``vertices`` (indices
+    into it), without their parameters in the faces' order: the faces'
+    boxes, slabs and hashes come from the vertices in one pass, and their
+    parameters are gathered once, in leaf order."""
+    vertices = _readonly(vertices, np.float64)
+    faces = _readonly(faces, np.int64)
+    n = len(faces)
+    cull = empty(n, 11)
+    hashes = np.empty(n, np.uint64)
+    _face_rows(vertices, faces, cull, hashes)
+    kinds = np.zeros(n, np.int8)
+    if not _all_different(hashes):
+        return build(kinds, triangle_params(vertices, faces), leaf_size)
+    child, count, order, depth = _build(cull, int(leaf_size))
+    params = triangle_params(vertices, faces, order)
+    return assemble(kinds, params, order, child, count, depth, (cull, cull))
 
 
 #: Batches at least this large are queried in Morton order of the points.

@@ -93,7 +93,9 @@ class TriangleMesh(Collection):
                 f"faces must index vertices, 0 <= index < {len(v)}; got {int(f[index])} at index {index}"
             )
         f = frozen(f, dtype=np.int64, new=f is not faces and f.dtype == np.int64)
-        resolved, tree = self._tree_for(broad_phase, len(f), lambda hierarchy: _face_rows(v, f, hierarchy))
+        resolved, tree = self._tree_for(
+            broad_phase, len(f), lambda bvh: bvh.build_mesh(v, f), lambda bvh: bvh.brute(*_primitives(v, f))
+        )
         self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None)
 
     def __repr__(self):
@@ -273,13 +275,3 @@ def _primitives(vertices, faces):
 
     return np.zeros(len(faces), np.int8), bvh.triangle_params(vertices, faces)
 
-
-def _face_rows(vertices, faces, hierarchy):
-    """``(kinds, params, rows)`` of the faces for the broad phase: a hierarchy
-    also gets their boxes, slabs and hashes, computed in the same pass."""
-    from . import bvh
-
-    if not hierarchy:
-        return (*_primitives(vertices, faces), None)
-    kinds, params, cull, hashes = bvh.face_rows(vertices, faces)
-    return kinds, params, (cull, hashes)

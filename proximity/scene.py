@@ -81,7 +81,9 @@ class Scene(Collection):
         kinds, params, counts, methods = _primitives(shapes)
         if sum(counts) == 0:
             raise ValueError(f"shapes must hold at least one primitive; got {len(shapes)} shapes with none")
-        resolved, tree = self._tree_for(broad_phase, len(kinds), lambda hierarchy: (kinds, params, None))
+        resolved, tree = self._tree_for(
+            broad_phase, len(kinds), lambda bvh: bvh.build(kinds, params), lambda bvh: bvh.brute(kinds, params)
+        )
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         offsets.flags.writeable = False
         self._init(
