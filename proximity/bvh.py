@@ -96,7 +96,7 @@ from numba.core import types
 
 from . import certified, methods, point_disk, point_triangle
 from ._fp import EPS
-from ._jit import address, function_at, inline, kernel, specialize
+from ._jit import address, function_at, inline, kernel, part, specialize
 from .results import Feature
 
 TRIANGLE = 0
@@ -761,12 +761,17 @@ def _build(rows, leaf_size):
     """
     n = rows.shape[0]
     cap = 2 * n - 1
-    child = np.zeros(cap, np.int64)
-    count = np.zeros(cap, np.int64)
-    first_child = np.zeros(cap, np.int64)
+    # Every entry is written before it is read (np.zeros or np.arange
+    # would each be a parallel loop of its own to compile).
+    child = np.empty(cap, np.int64)
+    count = np.empty(cap, np.int64)
+    first_child = np.empty(cap, np.int64)
     cmin = np.empty((cap, 3))
     cmax = np.empty((cap, 3))
-    order = np.arange(n)
+    order = np.empty(n, np.int64)
+    for j in range(n):
+        order[j] = j
+    child[0] = 0
     for a in range(3):
         cmin[0, a] = math.inf
         cmax[0, a] = -math.inf
@@ -789,7 +794,7 @@ def _build(rows, leaf_size):
             bins = np.empty((BINS, 9))
             for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
                 if count[i] > BUILD_SUBTREE:
-                    _split(i, first_child[i], child, count, rows, order, cmin, cmax, 0, bins)
+                    _split(i, first_child[i], child, count, rows, order, cmin, cmax, np.int64(0), bins)
         begin = end_level
     # The depth of each of those nodes (set from its parent's: an array
     # filled by NumPy here would be a parallel loop that Numba may fuse
@@ -1276,10 +1281,6 @@ def take_rows(source, rows):
     return out
 
 
-#: From this many faces on, the passes over a mesh's faces run on the threads.
-FACES_PARALLEL = 1 << 12
-
-
 @inline
 def _face_params(vertices, faces, order, params, j):
     k = order[j]
@@ -1292,12 +1293,8 @@ def _face_params(vertices, faces, order, params, j):
 
 @kernel(parallel=True)
 def _triangle_params(vertices, faces, order, params):
-    if order.shape[0] < FACES_PARALLEL:
-        for j in range(order.shape[0]):
-            _face_params(vertices, faces, order, params, j)
-    else:
-        for j in prange(order.shape[0]):
-            _face_params(vertices, faces, order, params, j)
+    for j in prange(order.shape[0]):
+        _face_params(vertices, faces, order, params, np.int64(j))
 
 
 def triangle_params(vertices, faces, order=None):
@@ -1391,12 +1388,8 @@ def _face_rows(vertices, faces, cull, hashes):
     """:func:`primitive_cull` and :func:`_row_hashes` of the triangles
     ``faces`` of ``vertices``, in one pass over the faces."""
     bits = vertices.view(np.uint64)
-    if faces.shape[0] < FACES_PARALLEL:
-        for k in range(faces.shape[0]):
-            _face_row(vertices, bits, faces, k, cull, hashes)
-    else:
-        for k in prange(faces.shape[0]):
-            _face_row(vertices, bits, faces, k, cull, hashes)
+    for k in prange(faces.shape[0]):
+        _face_row(vertices, bits, faces, np.int64(k), cull, hashes)
 
 
 def _all_different(hashes):
