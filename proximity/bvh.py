@@ -96,7 +96,7 @@ from numba.core import types
 
 from . import certified, methods, point_disk, point_triangle
 from ._fp import EPS
-from ._jit import address, function_at, inline, kernel, part, specialize
+from ._jit import address, function_at, inline, kernel, specialize
 from .results import Feature
 
 TRIANGLE = 0
@@ -721,7 +721,9 @@ def _subtree_task(i, child, count, cmin, cmax, block_child, block_count, rows, o
     for a in range(3):
         scratch_min[0, a] = cmin[i, a]
         scratch_max[0, a] = cmax[i, a]
-    return _split_subtree(base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size)
+    return _split_subtree(
+        base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size
+    )
 
 
 @inline
@@ -818,7 +820,9 @@ def _build(rows, leaf_size):
     nodes = np.empty(n_roots, np.int64)
     below = np.empty(n_roots, np.int64)
     for r in prange(n_roots):
-        made, levels = _subtree_task(roots[r], child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size)
+        made, levels = _subtree_task(
+            roots[r], child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size
+        )
         nodes[r] = made
         below[r] = levels
     total = n_nodes
@@ -1309,7 +1313,9 @@ def triangle_params(vertices, faces, order=None):
         return params
     order = np.arange(len(faces)) if order is None else order
     params = empty(len(order), N_PARAMS)
-    _triangle_params(_readonly(vertices, np.float64), _readonly(faces, np.int64), _readonly(order, np.int64), params)
+    _triangle_params(
+        _readonly(vertices, np.float64), _readonly(faces, np.int64), _readonly(order, np.int64), params
+    )
     return params
 
 

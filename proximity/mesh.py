@@ -274,4 +274,3 @@ def _primitives(vertices, faces):
     from . import bvh
 
     return np.zeros(len(faces), np.int8), bvh.triangle_params(vertices, faces)
-

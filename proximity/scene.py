@@ -82,7 +82,10 @@ class Scene(Collection):
         if sum(counts) == 0:
             raise ValueError(f"shapes must hold at least one primitive; got {len(shapes)} shapes with none")
         resolved, tree = self._tree_for(
-            broad_phase, len(kinds), lambda bvh: bvh.build(kinds, params), lambda bvh: bvh.brute(kinds, params)
+            broad_phase,
+            len(kinds),
+            lambda bvh: bvh.build(kinds, params),
+            lambda bvh: bvh.brute(kinds, params),
         )
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         offsets.flags.writeable = False
