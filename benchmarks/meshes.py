@@ -818,7 +818,7 @@ def run_peers(quick=False, seed=0, out=Path("bench-results"), names=None, log=pr
 def _brief(record):
     if "sets" not in record:
         return record.get("skipped") or record.get("error", "?")
-    cells = [f"build {record['build']:.2f} s"]
+    cells = [f"build {1e3 * record['build']:.1f} ms"]
     for name, timings in record["sets"].items():
         for kind, timing in timings.items():
             cells.append(f"{name} {kind} {timing['qps']:,.0f}/s")
@@ -901,7 +901,7 @@ def peers_markdown(raw, path="docs/performance.md"):
     for label, entry in raw["meshes"].items():
         lines += ["", f"**{label[0].upper() + label[1:]}**", ""]
         lines += [
-            f"| unsigned | precision | build (s) | near, 1 thread | near, {threads_all} threads | "
+            f"| unsigned | precision | build (ms) | near, 1 thread | near, {threads_all} threads | "
             f"box, 1 thread | box, {threads_all} threads | max error (near, box) | off (near, box) |",
             "|---|---|---:|---:|---:|---:|---:|---|---|",
         ]
@@ -928,7 +928,7 @@ def peers_markdown(raw, path="docs/performance.md"):
             max_error = ", ".join(f"{e[0]:.2g}" for e in errors)
             off = ", ".join(f"{e[1]:,} of {e[2]:,}" for e in errors)
             lines.append(
-                f"| {peer['label']} | {peer['precision']} | {build:.2f} | "
+                f"| {peer['label']} | {peer['precision']} | {_cell(1e3 * build)} | "
                 + " | ".join(cells)
                 + f" | {max_error} | {off} |"
             )
