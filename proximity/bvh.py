@@ -751,8 +751,8 @@ def _build(rows, leaf_size):
     :func:`_nearest`, ``order[j]`` the primitive now at row ``j``, and the
     largest depth of a leaf.
 
-    Binned SAH.  Nodes over more than :data:`BUILD_SUBTREE` primitives are
-    split one level of the tree at a time, the nodes of a level in
+    Binned SAH.  Nodes over more than :data:`BUILD_SUBTREE` primitives (and
+    more than ``leaf_size``) are split one level of the tree at a time, the nodes of a level in
     parallel, each on its own contiguous rows, and numbered breadth first.
     Each smaller node is then split down to its leaves as one task, in a
     scratch block of nodes that its rows index (a node over rows ``s .. s +
@@ -782,12 +782,13 @@ def _build(rows, leaf_size):
             cmin[0, a] = min(cmin[0, a], _centroid(rows, j, a))
             cmax[0, a] = max(cmax[0, a], _centroid(rows, j, a))
     count[0] = n
+    large = max(leaf_size, BUILD_SUBTREE)
     n_nodes = 1
     begin = 0
     while begin < n_nodes:
         end_level = n_nodes
         for i in range(begin, end_level):
-            if count[i] > BUILD_SUBTREE:
+            if count[i] > large:
                 first_child[i] = n_nodes
                 n_nodes += 2
         # In chunks of nodes, each with its own work array for the bins.
@@ -795,7 +796,7 @@ def _build(rows, leaf_size):
         for chunk in prange((end_level - begin + size - 1) // size):
             bins = np.empty((BINS, 9))
             for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
-                if count[i] > BUILD_SUBTREE:
+                if count[i] > large:
                     _split(i, first_child[i], child, count, rows, order, cmin, cmax, np.int64(0), bins)
         begin = end_level
     # The depth of each of those nodes (set from its parent's: an array
