@@ -1241,9 +1241,10 @@ def primitive_cull(kinds, params):
     return cull, loose
 
 
-#: From this many rows on, rows are gathered by compiled parallel loops.
-#: Each is a kernel to compile, or load from the cache, at its first call
-#: in a process (about 2 ms), which smaller meshes do without.
+#: From this many rows on, :func:`take_rows` and :func:`triangle_params`
+#: (in the faces' own order) gather by compiled parallel loops; below, by
+#: NumPy, which loads no kernel (about 2 ms at a kernel's first call in a
+#: process, or its compile): a brute-force mesh compiles none of them.
 GATHER_MIN = 1 << 15
 
 
