@@ -958,17 +958,19 @@ def _refit_top(child, count):
 
 
 @inline
-def _merge(bounds, i, child):
-    """Node ``i``'s box and normal sum (columns 6-8), from its two children's."""
+def _merge(bounds, i, rows, first, last):
+    """Node ``i``'s box and normal sum (columns 6-8) over ``rows[first:last]``,
+    which hold a box and a normal (sum) in the same columns: its primitives'
+    ``cull`` rows for a leaf, its two children's ``bounds`` otherwise."""
     for a in range(3):
         bounds[i, a] = math.inf
         bounds[i, 3 + a] = -math.inf
         bounds[i, 6 + a] = 0.0
-    for k in range(child[i], child[i] + 2):
+    for k in range(first, last):
         for a in range(3):
-            bounds[i, a] = min(bounds[i, a], bounds[k, a])
-            bounds[i, 3 + a] = max(bounds[i, 3 + a], bounds[k, 3 + a])
-            bounds[i, 6 + a] += bounds[k, 6 + a]
+            bounds[i, a] = min(bounds[i, a], rows[k, a])
+            bounds[i, 3 + a] = max(bounds[i, 3 + a], rows[k, 3 + a])
+            bounds[i, 6 + a] += rows[k, 6 + a]
 
 
 @inline
@@ -1013,19 +1015,11 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull):
         if count[i] > 0:
             start[i] = child[i]
             end[i] = child[i] + count[i]
-            for a in range(3):
-                bounds[i, a] = math.inf
-                bounds[i, 3 + a] = -math.inf
-                bounds[i, 6 + a] = 0.0
-            for k in range(start[i], end[i]):
-                for a in range(3):
-                    bounds[i, a] = min(bounds[i, a], cull[k, a])
-                    bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
-                    bounds[i, 6 + a] += cull[k, 6 + a]
+            _merge(bounds, i, cull, start[i], end[i])
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
-            _merge(bounds, i, child)
+            _merge(bounds, i, bounds, child[i], child[i] + 2)
     for t in range(1, n):
         i = nodes[t]
         _frame(bounds, i)
@@ -1043,7 +1037,7 @@ def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull):
     for j in prange(tasks.shape[0]):
         _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull)
     for t in range(top.shape[0] - 1, -1, -1):
-        _merge(bounds, top[t], child)
+        _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
     for j in prange(top.shape[0] + tasks.shape[0]):
         i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
         _frame(bounds, i)
