@@ -2,7 +2,7 @@
 
 A collection is a single shape (``batch_shape == ()``) made of many
 primitives; a query answers, for each point, with the nearest primitive's
-answer to the per-shape method.  The broad phase (:mod:`proximity.bvh`) is
+answer to the per-shape method.  The broad phase (:mod:`proximity.broadphase`) is
 chosen once, at construction.
 """
 
@@ -24,8 +24,8 @@ BRUTE_FORCE_MAX = 4
 class Collection(Frozen):
     """What meshes and scenes share: validation, broad phase and the query.
 
-    Subclasses set ``_tree`` (the broad phase of :mod:`proximity.bvh`),
-    ``methods`` and ``_has_circles``, and implement ``_result`` and
+    Subclasses set ``_tree`` (a :class:`proximity.broadphase.Tree`),
+    and ``methods``, and implement ``_result`` and
     ``_primitives``.
     """
 
@@ -36,22 +36,22 @@ class Collection(Frozen):
     @staticmethod
     def _tree_for(broad_phase, n, build, brute):
         """``(resolved broad phase, tree)`` for ``n`` primitives, from the
-        callables ``build(bvh)`` (a hierarchy) or ``brute(bvh)``, given the
-        module :mod:`proximity.bvh`."""
+        callables ``build(broadphase)`` (a hierarchy) or ``brute(broadphase)``,
+        given the package :mod:`proximity.broadphase`."""
         if broad_phase not in BROAD_PHASES:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
         if broad_phase == "auto":
             broad_phase = "brute" if n <= BRUTE_FORCE_MAX else "bvh"
         with _threads.kernel():
-            from . import bvh
+            from . import broadphase
 
-            tree = build(bvh) if broad_phase == "bvh" else brute(bvh)
+            tree = build(broadphase) if broad_phase == "bvh" else brute(broadphase)
         return broad_phase, tree
 
     # Pickling.  The tree's primitive data are copies of the collection's own
     # arrays, its primitives' boxes and slabs follow from them row by row
-    # (:func:`proximity.bvh.primitive_cull`, NumPy alone), and its node
-    # bounds from those and the topology (:func:`proximity.bvh.refit`, a
+    # (:func:`proximity.broadphase.bounds.primitive_cull`), and its node
+    # bounds from those and the topology (:func:`proximity.broadphase.refit.refit`, a
     # pass over the primitives), so a pickle holds only what the build
     # decided: which primitives, in which order, and the nodes.  Unpickling
     # builds no hierarchy, and the pickle is little more than the
@@ -76,7 +76,7 @@ class Collection(Frozen):
             object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
 
     def _restore_tree(self, hierarchy):
-        from . import bvh
+        from . import broadphase
 
         def read_only(array, dtype):
             return frozen(np.ascontiguousarray(array, dtype=dtype), dtype=dtype, new=True)
@@ -88,7 +88,7 @@ class Collection(Frozen):
         count = read_only(hierarchy["count"], np.int64)
         # Node bounds that pickles of earlier versions hold are not read.
         with _threads.kernel():
-            return bvh.assemble(kinds, params, index, child, count, hierarchy["depth"])
+            return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"])
 
     def _query(self, points, method, full):
         method = check_method(method, self.methods)
@@ -96,13 +96,13 @@ class Collection(Frozen):
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
         out_shape = points.shape[:-1]
-        # A method's closest point on a circle may leave the circle's box
-        # (``Method.loose``); the hierarchy then bounds circles by the cube C +- R.
-        loose = self._has_circles and method.loose
+        # A method's closest point may leave a primitive's box (``Method.loose``,
+        # the seed's circle); the hierarchy then has looser boxes for it.
+        loose = self._tree.loose and method.loose
         with _threads.kernel():
-            from . import bvh
+            from . import broadphase
 
-            out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
+            out = broadphase.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
         return out_shape, out
 
     def distance(self, points, *args, method=DEFAULT_METHOD):

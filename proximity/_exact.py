@@ -17,7 +17,7 @@ import math
 from fractions import Fraction
 from math import isqrt
 
-from .results import Feature
+from .features import Feature
 
 _MAX = Fraction(float.fromhex("0x1.fffffffffffffp+1023"))
 

@@ -19,10 +19,10 @@ Three decorators and three functions, used by every kernel module:
     function.  A comparison of such a constant is folded before typing, so
     a specialised kernel compiles only the code of its method.  Nothing is
     compiled before the first call that needs it.
-:func:`address` and :func:`function_at`
-    A block function called by a parallel loop through its address, so
-    that the loop compiles once for every method and the block is not
-    compiled again inside it.
+:func:`launcher`
+    A parallel loop that calls a block function, through the block's
+    address where Numba's internals allow it, so that the loop compiles
+    once for every method and the block is not compiled again inside it.
 
 The cache sits next to the sources (Numba's default).  Where that directory
 cannot be written (a read-only install), Numba's user-wide cache directory
@@ -30,6 +30,7 @@ is used, or ``NUMBA_CACHE_DIR`` when it is set; where none can be written,
 kernels are compiled in memory at every start, with a warning.
 """
 
+import functools
 import hashlib
 import os
 import tempfile
@@ -41,7 +42,6 @@ from llvmlite import ir
 from numba import njit
 from numba.core import cgutils
 from numba.core import types as nb_types
-from numba.experimental.function_type import _get_wrapper_address
 from numba.extending import intrinsic
 from numba.misc.appdirs import user_cache_dir
 
@@ -98,8 +98,29 @@ def part(func):
 
 def kernel(*signature, parallel=False):
     """A kernel, cached on disk where possible; compiled at its first call,
-    or at once when a ``signature`` is given."""
-    return njit(*signature, parallel=parallel, cache=CACHE, **_OPTIONS)
+    or at once when a ``signature`` is given.
+
+    Its cached file is named with :func:`_sources_stamp`, as a specialised
+    kernel's is: a kernel inlines helpers of other modules, and Numba
+    checks only its own module's file for changes.
+    """
+
+    def decorate(func):
+        return njit(*signature, parallel=parallel, cache=CACHE, **_OPTIONS)(_stamped(func, func.__globals__))
+
+    return decorate
+
+
+def _stamped(func, namespace, tag=None):
+    """A copy of ``func`` over ``namespace``, its qualified name extended by
+    ``tag`` and :func:`_sources_stamp` (which name its cached file)."""
+    copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__)
+    middle = "" if tag is None else f"__{tag}"
+    copy.__qualname__ = f"{func.__qualname__}{middle}__{_sources_stamp()}"
+    copy.__doc__ = func.__doc__
+    copy.__module__ = func.__module__
+    copy.__kwdefaults__ = func.__kwdefaults__
+    return copy
 
 
 _specialised = {}
@@ -120,10 +141,14 @@ def _sources_stamp():
     if _stamp is None:
         here = os.path.dirname(os.path.abspath(__file__))
         digest = hashlib.blake2b(digest_size=6)
-        for name in sorted(os.listdir(here)):
-            if name.endswith(".py"):
-                info = os.stat(os.path.join(here, name))
-                digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns};".encode())
+        for folder, subfolders, names in os.walk(here):
+            subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
+            for name in sorted(names):
+                if name.endswith(".py"):
+                    path = os.path.join(folder, name)
+                    info = os.stat(path)
+                    name = os.path.relpath(path, here)
+                    digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns};".encode())
         _stamp = digest.hexdigest()
     return _stamp
 
@@ -150,10 +175,7 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
         if kernel_ is None:
             namespace = dict(func.__globals__)
             namespace.update(bindings)
-            copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__)
-            copy.__qualname__ = f"{func.__qualname__}__{tag}__{_sources_stamp()}"
-            copy.__doc__ = func.__doc__
-            copy.__module__ = func.__module__
+            copy = _stamped(func, namespace, tag)
             args = (signature,) if signature is not None else ()
             if role == "pointer":
                 kernel_ = njit(*args, cache=CACHE, no_cpython_wrapper=True, **_OPTIONS)(copy)
@@ -168,23 +190,32 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
 # A parallel loop compiles its body into a function of its own, and
 # optimises and compiles it again with every function it calls linked in.
 # A block function called through its address instead is compiled once, on
-# its own, and the loop that calls it compiles once for every method.
+# its own, and the loop that calls it compiles once for every method.  The
+# address and the call through it use Numba's private first-class function
+# internals (:func:`_address`, :func:`_at`), which change between Numba
+# releases; where they are missing or differ, the loop calls the block
+# directly, through Numba's public API: the same code, the same bits, at
+# the cost of compiling the block into each loop.
+
+#: Whether blocks are called through their address; cleared, once per
+#: process, when Numba's private internals do not work as expected, or
+#: from the start where ``PROXIMITY_NUMBA_PUBLIC`` is set (for tests).
+BY_ADDRESS = not os.environ.get("PROXIMITY_NUMBA_PUBLIC")
+#: Why blocks are no longer called through their address, if they are not.
+ADDRESS_ERROR = None
 
 
-def address(kernel_, signature):
-    """The address of the C entry point of ``kernel_`` (a ``"pointer"`` kernel,
-    see :func:`specialize`) for ``signature``: an int, which a kernel turns
-    back into a function with :func:`function_at`."""
+def _address(kernel_, signature):
+    """The address of the C entry point of ``kernel_`` for ``signature`` (private Numba API)."""
+    from numba.experimental.function_type import _get_wrapper_address
+
     return _get_wrapper_address(kernel_, signature)
 
 
-def function_at(signature):
-    """An intrinsic ``f(address)`` that gives, in compiled code, the function
-    of ``signature`` at ``address`` (from :func:`address`), to be called.
-
-    Passing the address as an int, rather than the function itself, keeps
-    the call from Python as cheap as with arrays and numbers alone.
-    """
+def _at(signature):
+    """An intrinsic ``f(address)`` giving, in compiled code, the function of
+    ``signature`` at ``address`` (private Numba API: the members of its
+    first-class function values)."""
     function_type = nb_types.FunctionType(signature)
 
     @intrinsic
@@ -199,3 +230,67 @@ def function_at(signature):
         return function_type(nb_types.int64), codegen
 
     return at
+
+
+def _call_through(at):
+    @inline
+    def call(handle, *args):
+        fn = at(handle)
+        fn(*args)
+
+    return call
+
+
+def _call_direct(block):
+    @inline
+    def call(handle, *args):
+        block(*args)
+
+    return call
+
+
+_launchers = {}
+
+
+def _entry(kernel_, signature):
+    """The compiled entry point of ``kernel_`` for ``signature``, called
+    without Numba's dispatch: its arguments are converted as the signature
+    says, unchecked (records of arrays included, which dispatch would not
+    match to a signature of arrays of any layout)."""
+    return kernel_.overloads[tuple(signature.args)].entry_point
+
+
+def launcher(loop, tag, signature, block, block_signature):
+    """``loop`` compiled to call ``block``: a function of the loop's arguments but the first.
+
+    ``loop`` is a parallel kernel whose first argument is a handle, passed
+    on as the first argument of every ``CALL(handle, ...)`` in its body;
+    ``block`` is a ``"pointer"`` kernel (see :func:`specialize`) of
+    ``block_signature``, which ``CALL`` calls with the other arguments.
+    ``signature`` is the loop's, handle (an int64) first.  ``tag`` names
+    the loop's specialisation, one per block signature.
+
+    Through the block's address where Numba's internals allow it (the loop
+    compiles once for every block of a signature), else by a direct call.
+    The function returned skips Numba's dispatch: it must be called with
+    arguments of exactly the types of ``signature``.
+    """
+    global BY_ADDRESS, ADDRESS_ERROR
+    key = (loop, tag, block)
+    run = _launchers.get(key)
+    if run is not None:
+        return run
+    if BY_ADDRESS:
+        try:
+            call = _call_through(_at(block_signature))
+            compiled = specialize(loop, f"{tag}__address", signature, parallel=True, CALL=call)
+            run = functools.partial(_entry(compiled, signature), _address(block, block_signature))
+        except Exception as exc:  # noqa: BLE001  (any failure of the private internals)
+            BY_ADDRESS = False
+            ADDRESS_ERROR = exc
+    if run is None:
+        name = hashlib.blake2b(block.py_func.__qualname__.encode(), digest_size=6).hexdigest()
+        compiled = specialize(loop, f"{tag}__{name}", signature, parallel=True, CALL=_call_direct(block))
+        run = functools.partial(_entry(compiled, signature), 0)
+    _launchers[key] = run
+    return run

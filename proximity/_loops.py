@@ -251,9 +251,11 @@ def store(z, first, q, res):
 
 
 @inline
-def scatter_common(z, first, k0, nb, dist, sqr, point, feature, full):
+def scatter_common(z, first, k0, nb, out, full):
     """Distance (always) and, with ``full``, squared distance, point and
-    feature of queries ``k0 .. k0 + nb`` from rows ``first .. first + 5``."""
+    feature of queries ``k0 .. k0 + nb`` from rows ``first .. first + 5``,
+    into the first four fields of the outputs record ``out``."""
+    dist, sqr, point, feature = out[0], out[1], out[2], out[3]
     d = dist[k0 : k0 + nb]
     for q in range(nb):
         d[q] = z[first, q]
@@ -270,11 +272,11 @@ def scatter_common(z, first, k0, nb, dist, sqr, point, feature, full):
 
 
 @inline
-def scatter_triangles(z, first, k0, nb, dist, sqr, point, feature, bary, full):
-    """:func:`scatter_common`, and the barycentrics from rows ``first + 6 ..``."""
-    scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)
+def scatter_triangles(z, first, k0, nb, out, full):
+    """:func:`scatter_common`, and the barycentrics (``out[4]``) from rows ``first + 6 ..``."""
+    scatter_common(z, first, k0, nb, out, full)
     if full:
-        b = bary[k0 : k0 + nb]
+        b = out[4][k0 : k0 + nb]
         for q in range(nb):
             b[q, 0] = z[first + 6, q]
             b[q, 1] = z[first + 7, q]
@@ -282,13 +284,14 @@ def scatter_triangles(z, first, k0, nb, dist, sqr, point, feature, bary, full):
 
 
 @inline
-def scatter_round(z, first, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full):
-    """:func:`scatter_common`, and equidistant, height and radial from rows ``first + 6 ..``."""
-    scatter_common(z, first, k0, nb, dist, sqr, point, feature, full)
+def scatter_round(z, first, k0, nb, out, full):
+    """:func:`scatter_common`, and equidistant, height and radial (``out[4:7]``)
+    from rows ``first + 6 ..``."""
+    scatter_common(z, first, k0, nb, out, full)
     if full:
-        e = equidistant[k0 : k0 + nb]
-        h = height[k0 : k0 + nb]
-        r = radial[k0 : k0 + nb]
+        e = out[4][k0 : k0 + nb]
+        h = out[5][k0 : k0 + nb]
+        r = out[6][k0 : k0 + nb]
         for q in range(nb):
             e[q] = z[first + 6, q] != 0.0
             h[q] = z[first + 7, q]

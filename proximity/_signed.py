@@ -38,7 +38,7 @@ import numba
 import numpy as np
 
 from . import _threads
-from .results import EDGE01, FACE, VERTEX0
+from .features import EDGE01, FACE, VERTEX0
 
 EPS = 2.0**-52
 

@@ -42,7 +42,7 @@ from numba import literal_unroll, uint64
 
 from . import _dd as dd
 from ._counts import count  # noqa: F401  (re-exported for the kernels' callers)
-from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale, unscale
+from ._fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
 from ._jit import inline, part
 from ._loops import (
     BLOCK,
@@ -55,8 +55,7 @@ from ._loops import (
     store,
     triangle_at,
 )
-from .point_circle import decompose, rim_direction
-from .results import EDGE01, EDGE12, FACE, NONE, RIM, VERTEX0, VERTEX1, VERTEX2
+from .features import EDGE01, EDGE12, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 
 U = 2.0**-53
 SLACK = 2.0**-990  # absolute slack, in the scaled frame: covers underflowed terms
@@ -89,7 +88,7 @@ def _cross_abs(ax, ay, az, bx, by, bz):
 
 
 @inline
-def _faithful_sqrt(sh, sl, delta):
+def faithful_sqrt(sh, sl, delta):
     """``(ok, r, s)``: ``r`` is ``sqrt(sh + sl)`` rounded to a float, ``ok``
     when ``r`` is faithful for every value within ``delta`` of ``sh + sl``;
     ``s`` is the square rounded to a float.
@@ -109,7 +108,7 @@ def _faithful_sqrt(sh, sl, delta):
 
 
 @inline
-def _sum_sq(xh, xl, yh, yl, zh, zl):
+def sum_sq(xh, xl, yh, yl, zh, zl):
     """``x^2 + y^2 + z^2`` of double-doubles, with ``delta`` (no cancellation)."""
     s1h, s1l = dd.sqr(xh, xl)
     s2h, s2l = dd.sqr(yh, yl)
@@ -131,7 +130,7 @@ def _cross_dd(ah, al, bh, bl, ch, cl, dh, dl):
 
 
 @inline
-def _cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
+def cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
     """``(x, y, z) x (p, q, r)`` in double-double, with per-component bounds."""
     cxh, cxl, ex = _cross_dd(yh, yl, zh, zl, qh, ql, rh, rl)
     cyh, cyl, ey = _cross_dd(zh, zl, xh, xl, rh, rl, ph, pl)
@@ -140,15 +139,15 @@ def _cross3(xh, xl, yh, yl, zh, zl, ph, pl, qh, ql, rh, rl):
 
 
 @inline
-def _norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
+def norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
     """``|c|^2`` of a double-double vector whose components err by ``e*``."""
-    sh, sl, d = _sum_sq(xh, xl, yh, yl, zh, zl)
+    sh, sl, d = sum_sq(xh, xl, yh, yl, zh, zl)
     d += 2.0 * (abs(xh) * ex + abs(yh) * ey + abs(zh) * ez) + ex * ex + ey * ey + ez * ez
     return sh, sl, d
 
 
 @inline
-def _ratio(nh, nl, dn, mh, ml, dm):
+def ratio(nh, nl, dn, mh, ml, dm):
     """``n / m`` and its error bound, from the bounds of both."""
     qh, ql = dd.div(nh, nl, mh, ml)
     rel = dn / abs(nh) + dm / abs(mh) + 32.0 * U * U
@@ -211,7 +210,7 @@ def _classify(ax, ay, az, bx, by, bz, cx, cy, cz, e0x, e0y, e0z, e1x, e1y, e1z, 
 
 
 @inline
-def _scale_exact(x, f1, f2):
+def scale_exact(x, f1, f2):
     """``x * f1 * f2`` and whether that was exact (no underflow)."""
     y = x * f1 * f2
     return y, (y / f2) / f1 == x
@@ -227,14 +226,14 @@ def _dd_vec(x0, y0, z0, x1, y1, z1):
 
 
 @inline
-def _scale_vec(v, f1, f2):
+def scale_vec(v, f1, f2):
     """A double-double vector times ``f1 * f2``, and whether that was exact."""
-    xh, o1 = _scale_exact(v[0], f1, f2)
-    xl, o2 = _scale_exact(v[1], f1, f2)
-    yh, o3 = _scale_exact(v[2], f1, f2)
-    yl, o4 = _scale_exact(v[3], f1, f2)
-    zh, o5 = _scale_exact(v[4], f1, f2)
-    zl, o6 = _scale_exact(v[5], f1, f2)
+    xh, o1 = scale_exact(v[0], f1, f2)
+    xl, o2 = scale_exact(v[1], f1, f2)
+    yh, o3 = scale_exact(v[2], f1, f2)
+    yl, o4 = scale_exact(v[3], f1, f2)
+    zh, o5 = scale_exact(v[4], f1, f2)
+    zl, o6 = scale_exact(v[5], f1, f2)
     return (xh, xl, yh, yl, zh, zl), o1 & o2 & o3 & o4 & o5 & o6
 
 
@@ -272,8 +271,8 @@ def _vertex(a, b, c, feature):
     with ``(x, y, z)`` relative to ``P``.
     """
     x = _sel(feature == VERTEX0, a, _sel(feature == VERTEX1, b, c))
-    vh, vl, dv = _sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
-    ok, r, s = _faithful_sqrt(vh, vl, dv)
+    vh, vl, dv = sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
+    ok, r, s = faithful_sqrt(vh, vl, dv)
     b0 = 1.0 if feature == VERTEX0 else 0.0
     b1 = 1.0 if feature == VERTEX1 else 0.0
     b2 = 1.0 if feature == VERTEX2 else 0.0
@@ -290,11 +289,11 @@ def _edge(a, b, c, e0, e1, e2, feature):
     on12 = feature == EDGE12
     p = _sel(on01, a, _sel(on12, b, c))
     e = _sel(on01, e0, _sel(on12, e2, (-e1[0], -e1[1], -e1[2], -e1[3], -e1[4], -e1[5])))
-    k = _cross3(p[0], p[1], p[2], p[3], p[4], p[5], e[0], e[1], e[2], e[3], e[4], e[5])
-    nh, nl, dn = _norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
-    mh, ml, dm = _sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
-    eh, el, de = _ratio(nh, nl, dn, mh, ml, dm)
-    ok, r, s = _faithful_sqrt(eh, el, de)
+    k = cross3(p[0], p[1], p[2], p[3], p[4], p[5], e[0], e[1], e[2], e[3], e[4], e[5])
+    nh, nl, dn = norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
+    mh, ml, dm = sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
+    eh, el, de = ratio(nh, nl, dn, mh, ml, dm)
+    ok, r, s = faithful_sqrt(eh, el, de)
     t = -(p[0] * e[0] + p[2] * e[2] + p[4] * e[4]) / max(e[0] * e[0] + e[2] * e[2] + e[4] * e[4], 5e-324)
     t = min(max(t, 0.0), 1.0)
     near_end = t > 0.5
@@ -312,13 +311,13 @@ def _edge(a, b, c, e0, e1, e2, feature):
 @inline
 def _face(a, b, c, e0, e1, e2):
     """:func:`_vertex` for the face: ``d = |n . A| / |n|`` with ``n = E0 x E1``."""
-    n = _cross3(e0[0], e0[1], e0[2], e0[3], e0[4], e0[5], e1[0], e1[1], e1[2], e1[3], e1[4], e1[5])
+    n = cross3(e0[0], e0[1], e0[2], e0[3], e0[4], e0[5], e1[0], e1[1], e1[2], e1[3], e1[4], e1[5])
     th, tl, dt = _dot_bounded(n, (n[6], n[7], n[8]), a)
     th2, tl2 = dd.sqr(th, tl)
     dt2 = 2.0 * abs(th) * dt + dt * dt + 8.0 * U * U * abs(th2)
-    gh, gl, dg = _norm2_bounded(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8])
-    fh, fl, df = _ratio(th2, tl2, dt2, gh, gl, dg)
-    ok, r, s = _faithful_sqrt(fh, fl, df)
+    gh, gl, dg = norm2_bounded(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8])
+    fh, fl, df = ratio(th2, tl2, dt2, gh, gl, dg)
+    ok, r, s = faithful_sqrt(fh, fl, df)
     fx, fy, fz = cross_accurate(e0[0], e0[2], e0[4], e1[0], e1[2], e1[4])
     q = dot3_accurate(fx, fy, fz, a[0], a[2], a[4]) / max(fx * fx + fy * fy + fz * fz, 5e-324)
     wc = max(edge_function(fx, fy, fz, a[0], a[2], a[4], e0[0], e0[2], e0[4]), 0.0)
@@ -407,8 +406,8 @@ def _store_at(w, m, part, feature):
 
 
 @part
-def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
-    """Certified queries ``k0 .. k0 + nb`` of ``point_triangle._batch``.
+def triangle_block(shape, P, n_j, k0, nb, out, exact, full):
+    """Certified queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
 
     As ``point_triangle._robust_block``: gathered into local scratch and
     classified by a loop that compiles to SIMD code.  The formula for the
@@ -421,7 +420,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
     the rows that even it left to the exact fallback.
     """
     z = np.empty((PAIR_ROWS, BLOCK))
-    gather_triangles(z, V, P, n_j, k0, nb)
+    gather_triangles(z, shape.vertices, P, n_j, k0, nb)
     kinds = np.empty(BLOCK)
     for q in range(BLOCK):
         a, b, c, e0, e1, e2, _, ok = differences(*triangle_at(z, q))
@@ -491,7 +490,7 @@ def triangle_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, fu
         else:
             nan = math.nan
             store(z, PAIR_OUT, q, (nan, nan, nan, nan, nan, float(NONE), nan, nan, nan))
-    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
+    scatter_triangles(z, PAIR_OUT, k0, nb, out, full)
 
 
 @part
@@ -514,12 +513,12 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     g = 1.0
     if m < SAFE_MIN or m > SAFE_MAX:
         f1, f2 = pow2_scale(m)
-        a, o1 = _scale_vec(a, f1, f2)
-        b, o2 = _scale_vec(b, f1, f2)
-        c, o3 = _scale_vec(c, f1, f2)
-        e0, o4 = _scale_vec(e0, f1, f2)
-        e1, o5 = _scale_vec(e1, f1, f2)
-        e2, o6 = _scale_vec(e2, f1, f2)
+        a, o1 = scale_vec(a, f1, f2)
+        b, o2 = scale_vec(b, f1, f2)
+        c, o3 = scale_vec(c, f1, f2)
+        e0, o4 = scale_vec(e0, f1, f2)
+        e1, o5 = scale_vec(e1, f1, f2)
+        e2, o6 = scale_vec(e2, f1, f2)
         if not (o1 & o2 & o3 & o4 & o5 & o6):
             return fail
         g = (1.0 / f1) * (1.0 / f2)
@@ -542,103 +541,3 @@ def triangle(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     r = (ok, d, s, x, y, z, feature, b0, b1, b2)
     r = finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz)
     return r if r[0] == CERTAIN else fail
-
-
-@part
-def round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
-    """Certified point-circle or point-disk query, or a request for the fallback.
-
-    ``u`` is the unit normal (for the closest point) and ``n`` the normal as
-    given (for the exact terms).  Returns ``(status, distance, sqr_distance,
-    x, y, z, feature, equidistant, height, radial)``.
-    """
-    nan = math.nan
-    fail = (EXACT, nan, nan, nan, nan, nan, NONE, False, nan, nan)
-    dxh, dxl = dd.diff(px, cx)
-    dyh, dyl = dd.diff(py, cy)
-    dzh, dzl = dd.diff(pz, cz)
-    r = radius
-    m = max(max(abs(dxh), abs(dyh)), max(abs(dzh), r))
-    if not m < np.inf:
-        return fail
-    g1 = 1.0
-    g2 = 1.0
-    if m == 0.0:
-        return CERTAIN, 0.0, 0.0, cx, cy, cz, FACE if is_disk else RIM, not is_disk, 0.0, 0.0
-    if m < SAFE_MIN or m > SAFE_MAX:
-        f1, f2 = pow2_scale(m)
-        (dxh, dxl, dyh, dyl, dzh, dzl), o1 = _scale_vec((dxh, dxl, dyh, dyl, dzh, dzl), f1, f2)
-        r, o2 = _scale_exact(r, f1, f2)
-        if not (o1 and o2):
-            return fail
-        g1 = 1.0 / f1
-        g2 = 1.0 / f2
-    # The normal as given, scaled by a power of two (only its direction counts).
-    k1, k2 = pow2_scale(max(max(abs(nx), abs(ny)), abs(nz)))
-    nx, o1 = _scale_exact(nx, k1, k2)
-    ny, o2 = _scale_exact(ny, k1, k2)
-    nz, o3 = _scale_exact(nz, k1, k2)
-    if not (o1 and o2 and o3):
-        return fail
-
-    # |n|^2 h^2 = (n . D)^2 and |n|^2 q^2 = |n x D|^2, in double-double.
-    t1h, t1l = dd.mul(nx, 0.0, dxh, dxl)
-    t2h, t2l = dd.mul(ny, 0.0, dyh, dyl)
-    t3h, t3l = dd.mul(nz, 0.0, dzh, dzl)
-    hh, hl = dd.add(t1h, t1l, t2h, t2l)
-    hh, hl = dd.add(hh, hl, t3h, t3l)
-    dh = 16.0 * U * U * (abs(t1h) + abs(t2h) + abs(t3h))
-    vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez = _cross3(
-        nx, 0.0, ny, 0.0, nz, 0.0, dxh, dxl, dyh, dyl, dzh, dzl
-    )
-    xh, xl, dx2 = _norm2_bounded(vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez)
-    mh, ml, dm = _sum_sq(nx, 0.0, ny, 0.0, nz, 0.0)
-
-    # On the axis only when n x D is exactly zero; within rounding of zero
-    # (or underflowed), only exact arithmetic decides.
-    on_axis = vxh == 0.0 and vyh == 0.0 and vzh == 0.0 and ex == 0.0 and ey == 0.0 and ez == 0.0
-    if not on_axis and xh <= dx2 * (1.0 + 1e-12) + SLACK:
-        return fail
-    # q^2 <= R^2 decides a disk's feature: compare |n x D|^2 with R^2 |n|^2.
-    r2h, r2l = dd.sqr(r, 0.0)
-    rrh, rrl = dd.mul(r2h, r2l, mh, ml)
-    face = False
-    if is_disk:
-        gh, _ = dd.sub(rrh, rrl, xh, xl)
-        bound = dx2 + 32.0 * U * U * abs(rrh)
-        if abs(gh) <= bound * (1.0 + 1e-12) + SLACK:
-            return fail
-        face = gh > 0.0
-    h2h, h2l = dd.sqr(hh, hl)
-    if h2h == 0.0 and hh != 0.0:
-        return fail  # the height's square underflowed
-    dh2 = 2.0 * abs(hh) * dh + dh * dh + 8.0 * U * U * abs(h2h)
-    if h2h != 0.0:
-        s1h, s1l, d1 = _ratio(h2h, h2l, dh2, mh, ml, dm)
-    else:
-        s1h, s1l, d1 = 0.0, 0.0, 2.0 * dh2 / mh
-    if face:
-        sh, sl, delta = s1h, s1l, d1
-    else:
-        q2h, q2l, dq2 = _ratio(xh, xl, dx2, mh, ml, dm) if xh != 0.0 else (0.0, 0.0, 0.0)
-        qh, ql = dd.sqrt(q2h, q2l)
-        dq = (0.5 * dq2 / q2h + 8.0 * U * U) * qh if q2h != 0.0 else 0.0
-        wh, wl = dd.sub(qh, ql, r, 0.0)
-        dw = dq + 4.0 * U * U * abs(wh)
-        w2h, w2l = dd.sqr(wh, wl)
-        dw2 = 2.0 * abs(wh) * dw + dw * dw + 8.0 * U * U * abs(w2h)
-        sh, sl = dd.add(s1h, s1l, w2h, w2l)
-        delta = d1 + dw2 + 4.0 * U * U * abs(sh)
-    ok, dist, s = _faithful_sqrt(sh, sl, delta)
-    dist = dist * g1 * g2
-    if not ok or (dist < 2.2250738585072014e-308 and dist != 0.0) or not dist < np.inf:
-        return fail
-
-    # The closest point, height and radial distance in float, as the robust method.
-    h, qx, qy, qz, q, _, _, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-    if face:
-        x, y, z, feature = cx + unscale(qx, g), cy + unscale(qy, g), cz + unscale(qz, g), FACE
-    else:
-        wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
-        x, y, z, feature = cx + radius * wx, cy + radius * wy, cz + radius * wz, RIM
-    return CERTAIN, dist, s * g1 * g1 * g2 * g2, x, y, z, feature, on_axis, unscale(h, g), unscale(q, g)

@@ -10,8 +10,9 @@ Examples
 --------
 >>> import proximity.compile
 >>> done = proximity.compile.compile_all(methods=["robust"], log=None)
->>> [name for name in done if name.startswith("disk")]
-['disk: robust, one point', 'disk: robust, pairs', 'disk: robust, many points against one shape']
+>>> [name for name in done if name.startswith("disk")]  # doctest: +NORMALIZE_WHITESPACE
+['disk and circle: robust, one point', 'disk and circle: robust, pairs',
+ 'disk and circle: robust, many points against one shape']
 """
 
 import argparse
@@ -21,46 +22,61 @@ import time
 import numpy as np
 
 from . import methods as _methods
+from . import primitives
+
+
+def _kernel_modules():
+    """``(names, module)`` of every primitive kernel module, with the names of its kinds."""
+    modules = {}
+    for p in primitives.BY_CODE:
+        modules.setdefault(p.module, []).append(p.name)
+    return [(" and ".join(names), primitives.REGISTRY[names[0]].kernels) for names in modules.values()]
 
 
 def _jobs(method):
     """``(description, function)`` for each kernel of ``method``."""
-    from . import bvh, point_disk, point_triangle
+    from . import _batch
     from ._loops import single_entry
+    from .broadphase.traverse import search_kernel
 
     m = _methods.resolve(method)
     name = m.name
-    jobs = [
-        (f"triangle: {name}, one point", lambda: single_entry(point_triangle.single_kernel(m))),
-        (f"triangle: {name}, pairs", lambda: point_triangle.batch_kernel(m, False)),
-        (f"triangle: {name}, many points against one shape", lambda: point_triangle.batch_kernel(m, True)),
-        (f"disk: {name}, one point", lambda: single_entry(point_disk.single_kernel(m))),
-        (f"disk: {name}, pairs", lambda: point_disk.batch_kernel(m, False)),
-        (f"disk: {name}, many points against one shape", lambda: point_disk.batch_kernel(m, True)),
-        (f"mesh: {name}", lambda: bvh.query_kernel(m, False)),
-        (f"scene with disks or circles: {name}", lambda: bvh.query_kernel(m, True)),
-    ]
+    jobs = []
+    for kinds, module in _kernel_modules():
+        jobs += [
+            (f"{kinds}: {name}, one point", lambda module=module: single_entry(module.single_kernel(m))),
+            (f"{kinds}: {name}, pairs",
+             lambda module=module: _batch.batch_kernel(module.LAYOUT, module.block(m, False))),
+            (f"{kinds}: {name}, many points against one shape",
+             lambda module=module: _batch.batch_kernel(module.LAYOUT, module.block(m, True))),
+        ]  # fmt: skip
+    for p in primitives.BY_CODE:
+        jobs.append((f"collection of {p.name}s: {name}", lambda p=p: search_kernel(m, (p,))))
+    jobs.append((f"collection of several kinds: {name}", lambda: search_kernel(m, primitives.BY_CODE)))
     return jobs
 
 
 def _broad_phase():
     """The hierarchy's build, refit, visiting order and candidate search, on a small mesh."""
-    from . import bvh
+    from .broadphase import _alloc, build, traverse
+    from .broadphase.nearest import _morton_order
 
     rng = np.random.default_rng(0)
+    width = primitives.N_PARAMS
     kinds = np.zeros(8, np.int8)
-    params = np.concatenate([rng.random((8, 9)), np.zeros((8, 1))], axis=1)
-    tree = bvh.build(kinds, params)
+    params = np.concatenate([rng.random((8, 9)), np.zeros((8, width - 9))], axis=1)
+    tree = build.build_tree(kinds, params)
     # The allocation and gathers of large meshes, with the argument types they are given.
-    bvh._empty(1, 1)
-    bvh._take_rows(bvh._readonly(params, np.float64), bvh._readonly([1, 0], np.int64), np.empty((2, 10)))
-    vertices, faces = bvh._readonly(params[:, :3], np.float64), bvh._readonly([[0, 1, 2]], np.int64)
-    bvh.build_mesh(vertices, faces)
-    points = bvh._readonly(rng.random((2, 3)), np.float64)
-    bvh._morton_order(points)
+    _alloc._empty(1, 1)
+    readonly = _alloc.readonly
+    _alloc._take_rows(readonly(params, np.float64), readonly([1, 0], np.int64), np.empty((2, width)))
+    vertices, faces = readonly(params[:, :3], np.float64), readonly([[0, 1, 2]], np.int64)
+    build.build_faces(vertices, faces, 0)
+    points = readonly(rng.random((2, 3)), np.float64)
+    _morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
-    bvh._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
+    traverse._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
 
 
 def _winding():

@@ -7,13 +7,14 @@ bit for bit, and the index of that face.  Degenerate faces (collinear or
 coincident vertices) are queried like any other: ``robust`` answers for the
 segment or point they are.  How the nearest face is found without testing
 every face, and why that never changes the answer, is in
-:mod:`proximity.bvh`.
+:mod:`proximity.broadphase`.
 """
 
 import numpy as np
 
 from ._collection import Collection
 from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
+from .primitives import TRIANGLE
 from .results import MeshResult, format_repr
 from .shapes import DEFAULT_METHOD, Triangle, keyword_only
 
@@ -67,7 +68,6 @@ class TriangleMesh(Collection):
 
     __slots__ = ("vertices", "faces", "broad_phase", "_tree", "_signs")
     methods = Triangle.methods
-    _has_circles = False
 
     def __init__(self, vertices, faces=None, *, broad_phase="auto"):
         if faces is None:
@@ -94,7 +94,10 @@ class TriangleMesh(Collection):
             )
         f = frozen(f, dtype=np.int64, new=f is not faces and f.dtype == np.int64)
         resolved, tree = self._tree_for(
-            broad_phase, len(f), lambda bvh: bvh.build_mesh(v, f), lambda bvh: bvh.brute(*_primitives(v, f))
+            broad_phase,
+            len(f),
+            lambda bp: bp.build_faces(v, f, TRIANGLE.code),
+            lambda bp: bp.brute(*_primitives(v, f)),
         )
         self._init(vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None)
 
@@ -262,6 +265,10 @@ class TriangleMesh(Collection):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""
         return _primitives(self.vertices, self.faces[index])
 
+    def _rows(self):
+        """``(kinds, params)`` of every face, in order, as a collection stores them."""
+        return _primitives(self.vertices, self.faces)
+
     def _result(self, fields):
         del fields["flag"]
         barycentric = fields.pop("extra")
@@ -271,6 +278,6 @@ class TriangleMesh(Collection):
 
 def _primitives(vertices, faces):
     """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
-    from . import bvh
+    from . import broadphase
 
-    return np.zeros(len(faces), np.int8), bvh.triangle_params(vertices, faces)
+    return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces)

@@ -13,41 +13,46 @@ always takes the rim branch.
 
 import functools
 import math
+import sys
 
 import numpy as np
 from numba import prange
-from numba.core import types
 
-from . import _exact, _pool, certified, methods
-from ._fp import UNSCALED, unscale
-from ._jit import address, function_at, inline, kernel, part, specialize
+from . import _dd as dd
+from . import _exact, certified, methods
+from ._batch import Layout, run
+from ._fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
+from ._jit import inline, kernel, part, specialize
 from ._loops import (
-    A_IN2,
-    A_IN3,
     BLOCK,
     ONE_OK,
     ONE_OUT,
     ONE_P,
     ONE_ROWS,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT_FLAG,
     ROUND_OK,
     ROUND_OUT,
     ROUND_ROWS,
     gather_points,
     gather_round,
-    loop_views,
     point_at,
     round_at,
     scatter_round,
     single_entry,
-    single_shape,
     store,
 )
-from .point_circle import circle, decompose, decompose_local, rim, seed_circle, seed_projection, window
-from .results import Feature
+from .features import Feature
+from .methods import CERTIFIED
+from .point_circle import (
+    circle,
+    decompose,
+    decompose_local,
+    rim,
+    rim_direction,
+    seed_circle,
+    seed_projection,
+    window,
+)
+from .primitives import CIRCLE, DISK
 
 NONE = int(Feature.NONE)
 FACE = int(Feature.FACE)
@@ -131,13 +136,114 @@ def eberly_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz
     return certified.CERTAIN, d, sqr, x, y, z, RIM, e, h, q
 
 
+@part
+def certified_round(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
+    """Certified point-circle or point-disk query, or a request for the fallback.
+
+    ``u`` is the unit normal (for the closest point) and ``n`` the normal as
+    given (for the exact terms).  Returns ``(status, distance, sqr_distance,
+    x, y, z, feature, equidistant, height, radial)``.
+    """
+    nan = math.nan
+    fail = (certified.EXACT, nan, nan, nan, nan, nan, NONE, False, nan, nan)
+    dxh, dxl = dd.diff(px, cx)
+    dyh, dyl = dd.diff(py, cy)
+    dzh, dzl = dd.diff(pz, cz)
+    r = radius
+    m = max(max(abs(dxh), abs(dyh)), max(abs(dzh), r))
+    if not m < np.inf:
+        return fail
+    g1 = 1.0
+    g2 = 1.0
+    if m == 0.0:
+        return certified.CERTAIN, 0.0, 0.0, cx, cy, cz, FACE if is_disk else RIM, not is_disk, 0.0, 0.0
+    if m < SAFE_MIN or m > SAFE_MAX:
+        f1, f2 = pow2_scale(m)
+        (dxh, dxl, dyh, dyl, dzh, dzl), o1 = certified.scale_vec((dxh, dxl, dyh, dyl, dzh, dzl), f1, f2)
+        r, o2 = certified.scale_exact(r, f1, f2)
+        if not (o1 and o2):
+            return fail
+        g1 = 1.0 / f1
+        g2 = 1.0 / f2
+    # The normal as given, scaled by a power of two (only its direction counts).
+    k1, k2 = pow2_scale(max(max(abs(nx), abs(ny)), abs(nz)))
+    nx, o1 = certified.scale_exact(nx, k1, k2)
+    ny, o2 = certified.scale_exact(ny, k1, k2)
+    nz, o3 = certified.scale_exact(nz, k1, k2)
+    if not (o1 and o2 and o3):
+        return fail
+
+    # |n|^2 h^2 = (n . D)^2 and |n|^2 q^2 = |n x D|^2, in double-double.
+    t1h, t1l = dd.mul(nx, 0.0, dxh, dxl)
+    t2h, t2l = dd.mul(ny, 0.0, dyh, dyl)
+    t3h, t3l = dd.mul(nz, 0.0, dzh, dzl)
+    hh, hl = dd.add(t1h, t1l, t2h, t2l)
+    hh, hl = dd.add(hh, hl, t3h, t3l)
+    dh = 16.0 * certified.U * certified.U * (abs(t1h) + abs(t2h) + abs(t3h))
+    vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez = certified.cross3(
+        nx, 0.0, ny, 0.0, nz, 0.0, dxh, dxl, dyh, dyl, dzh, dzl
+    )
+    xh, xl, dx2 = certified.norm2_bounded(vxh, vxl, vyh, vyl, vzh, vzl, ex, ey, ez)
+    mh, ml, dm = certified.sum_sq(nx, 0.0, ny, 0.0, nz, 0.0)
+
+    # On the axis only when n x D is exactly zero; within rounding of zero
+    # (or underflowed), only exact arithmetic decides.
+    on_axis = vxh == 0.0 and vyh == 0.0 and vzh == 0.0 and ex == 0.0 and ey == 0.0 and ez == 0.0
+    if not on_axis and xh <= dx2 * (1.0 + 1e-12) + certified.SLACK:
+        return fail
+    # q^2 <= R^2 decides a disk's feature: compare |n x D|^2 with R^2 |n|^2.
+    r2h, r2l = dd.sqr(r, 0.0)
+    rrh, rrl = dd.mul(r2h, r2l, mh, ml)
+    face = False
+    if is_disk:
+        gh, _ = dd.sub(rrh, rrl, xh, xl)
+        bound = dx2 + 32.0 * certified.U * certified.U * abs(rrh)
+        if abs(gh) <= bound * (1.0 + 1e-12) + certified.SLACK:
+            return fail
+        face = gh > 0.0
+    h2h, h2l = dd.sqr(hh, hl)
+    if h2h == 0.0 and hh != 0.0:
+        return fail  # the height's square underflowed
+    dh2 = 2.0 * abs(hh) * dh + dh * dh + 8.0 * certified.U * certified.U * abs(h2h)
+    if h2h != 0.0:
+        s1h, s1l, d1 = certified.ratio(h2h, h2l, dh2, mh, ml, dm)
+    else:
+        s1h, s1l, d1 = 0.0, 0.0, 2.0 * dh2 / mh
+    if face:
+        sh, sl, delta = s1h, s1l, d1
+    else:
+        q2h, q2l, dq2 = certified.ratio(xh, xl, dx2, mh, ml, dm) if xh != 0.0 else (0.0, 0.0, 0.0)
+        qh, ql = dd.sqrt(q2h, q2l)
+        dq = (0.5 * dq2 / q2h + 8.0 * certified.U * certified.U) * qh if q2h != 0.0 else 0.0
+        wh, wl = dd.sub(qh, ql, r, 0.0)
+        dw = dq + 4.0 * certified.U * certified.U * abs(wh)
+        w2h, w2l = dd.sqr(wh, wl)
+        dw2 = 2.0 * abs(wh) * dw + dw * dw + 8.0 * certified.U * certified.U * abs(w2h)
+        sh, sl = dd.add(s1h, s1l, w2h, w2l)
+        delta = d1 + dw2 + 4.0 * certified.U * certified.U * abs(sh)
+    ok, dist, s = certified.faithful_sqrt(sh, sl, delta)
+    dist = dist * g1 * g2
+    if not ok or (dist < 2.2250738585072014e-308 and dist != 0.0) or not dist < np.inf:
+        return fail
+
+    # The closest point, height and radial distance in float, as the robust method.
+    h, qx, qy, qz, q, _, _, g = decompose(cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+    if face:
+        x, y, z, feature = cx + unscale(qx, g), cy + unscale(qy, g), cz + unscale(qz, g), FACE
+    else:
+        wx, wy, wz = rim_direction(ux, uy, uz, qx, qy, qz, q, on_axis)
+        x, y, z, feature = cx + radius * wx, cy + radius * wy, cz + radius * wz, RIM
+    sqr = s * g1 * g1 * g2 * g2
+    return certified.CERTAIN, dist, sqr, x, y, z, feature, on_axis, unscale(h, g), unscale(q, g)
+
+
 @inline
 def certified_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
     """The certified filter, as :func:`robust_query`; status ``EXACT`` where
     the query needs the exact fallback."""
     if not _finite(px, py, pz):
         return _NAN_ROW
-    return certified.round_shape(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
+    return certified_round(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
 
 
 # Bound per method by :func:`proximity._jit.specialize`: the query of one
@@ -187,27 +293,8 @@ def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     return res, ok
 
 
-def _block(
-    is_disk,
-    C,
-    U,
-    N,
-    R,
-    P,
-    n_j,
-    k0,
-    nb,
-    dist,
-    sqr,
-    point,
-    feature,
-    equidistant,
-    height,
-    radial,
-    exact,
-    full,
-):
-    """Queries ``k0 .. k0 + nb`` of :func:`_batch`.
+def _block(shape, P, n_j, k0, nb, out, exact, full):
+    """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
 
     Gathered into local scratch (the rows of ``ROUND_*``); for ``robust``,
     computed by a loop that compiles to SIMD code (with, in row
@@ -215,6 +302,7 @@ def _block(
     query is done one by one on the scalar path, which is the only path of
     the other methods.  Then scattered to the outputs.
     """
+    is_disk, C, U, N, R = shape
     z = np.empty((ROUND_ROWS, BLOCK))
     gather_round(z, C, U, P, R, n_j, k0, nb)
     if SIMD:
@@ -237,13 +325,11 @@ def _block(
         if EXACT_FALLBACK:
             exact[k] = cert[0] != certified.CERTAIN
         store(z, ROUND_OUT, q, cert[1:])
-    scatter_round(z, ROUND_OUT, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
+    scatter_round(z, ROUND_OUT, k0, nb, out, full)
 
 
 @part
-def _robust_block_one(
-    is_disk, C, U, N, R, P, n_j, k0, nb, dist, sqr, point, feature, equidistant, height, radial, exact, full
-):
+def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
@@ -252,6 +338,7 @@ def _robust_block_one(
     the rim direction used on the axis) once per block instead of once per
     query.
     """
+    is_disk, C, U, _, R = shape
     z = np.empty((ONE_ROWS, BLOCK))
     gather_points(z, ONE_P, P, n_j, k0, nb)
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
@@ -275,71 +362,7 @@ def _robust_block_one(
             # The robust method reads the unit normal only; it stands in for the normal as given.
             res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
             store(z, ONE_OUT, q, res[1:])
-    scatter_round(z, ONE_OUT, k0, nb, dist, sqr, point, feature, equidistant, height, radial, full)
-
-
-_BLOCK_SIGNATURE = types.void(
-    types.boolean,
-    A_IN3,
-    A_IN3,
-    A_IN3,
-    A_IN2,
-    A_IN3,
-    types.int64,
-    types.int64,
-    types.int64,
-    OUT1,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT_FLAG,
-    OUT1,
-    OUT1,
-    OUT_FLAG,
-    types.boolean,
-)
-# The batch loop: the block's address, then the block's arguments but ``k0, nb``.
-_BATCH_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[:7], *_BLOCK_SIGNATURE.args[9:])
-_block_at = function_at(_BLOCK_SIGNATURE)
-
-
-def _batch(
-    block_address,
-    is_disk,
-    C,
-    U,
-    N,
-    R,
-    P,
-    n_j,
-    dist,
-    sqr,
-    point,
-    feature,
-    equidistant,
-    height,
-    radial,
-    exact,
-    full,
-):
-    """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
-
-    ``C``, ``U`` (unit normals), ``N`` (normals as given) and ``P`` are
-    ``(I, J, 3)``, ``R`` is ``(I, J)``, any strides.  With ``full=False``
-    only ``dist`` is written.  Blocks of queries go to the threads, each
-    handled by the method's block function, called at ``block_address`` (as
-    in :func:`proximity.point_triangle._batch`); the certified method flags
-    in ``exact`` the rows its filter could not decide.
-    """
-    n = dist.shape[0]
-    block_fn = _block_at(block_address)
-    for block in prange((n + BLOCK - 1) // BLOCK):
-        k0 = block * BLOCK
-        nb = min(BLOCK, n - k0)
-        block_fn(
-            is_disk, C, U, N, R, P, n_j, k0, nb,
-            dist, sqr, point, feature, equidistant, height, radial, exact, full,
-        )  # fmt: skip
+    scatter_round(z, ONE_OUT, k0, nb, out, full)
 
 
 # Per method: the query of one point, whether it has a SIMD loop (robust),
@@ -358,55 +381,143 @@ def single_kernel(method):
     return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
 
 
-def block_kernel(method, one):
-    """The block function of ``method``, called by address; ``one``: for
-    many points against one shape."""
-    query_, simd, exact_fallback, block_one = KERNELS[method.name]
-    if one and block_one is not None:
-        func = block_one.py_func
-        return specialize(func, func.__name__, _BLOCK_SIGNATURE, role="pointer")
-    bindings = dict(QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback)
-    return specialize(_block, method.name, _BLOCK_SIGNATURE, role="pointer", **bindings)
+#: The arrays of a batch query: whether the shapes are disks (else circles),
+#: center, unit normal, normal as given and radius, and the answers' extra fields.
+LAYOUT = Layout(
+    "round",
+    flags=("is_disk",),
+    arrays=(("center", 1), ("unit_normal", 1), ("normal", 1), ("radius", 0)),
+    extra=(("equidistant", np.bool_, 1), ("height", np.float64, 1), ("radial", np.float64, 1)),
+)
 
 
 @functools.cache
-def batch_kernel(method, one):
-    """The compiled batch loop of ``method``, a function of the batch
-    arguments; ``one``: every query is against one shape."""
-    loop = specialize(_batch, "blocks", _BATCH_SIGNATURE, parallel=True)
-    return functools.partial(loop, address(block_kernel(method, one), _BLOCK_SIGNATURE))
+def block(method, one):
+    """The block function of ``method``, called by the batch loop; ``one``:
+    every query is against one shape."""
+    query_, simd, exact_fallback, block_one = KERNELS[method.name]
+    if one and block_one is not None:
+        func = block_one.py_func
+        return specialize(func, func.__name__, LAYOUT.block_signature, role="pointer")
+    bindings = dict(QUERY=query_, SIMD=simd, EXACT_FALLBACK=exact_fallback)
+    return specialize(_block, method.name, LAYOUT.block_signature, role="pointer", **bindings)
+
+
+def exact(is_disk, center, unit_normal, normal, radius, point):
+    """The certified method's exact answer to one query, as a flat tuple of the outputs."""
+    return _exact_query(is_disk, center, unit_normal, normal, radius, point)
 
 
 def query(method, is_disk, center, unit_normal, normal, radius, points, out_shape, full):
     """Run the batch kernel; inputs are validated float64 arrays."""
-    (C, U, N, R, P), n_j = loop_views(
-        out_shape, [(center, 1), (unit_normal, 1), (normal, 1), (radius, 0), (points, 1)]
-    )
-    n = C.shape[0] * C.shape[1]
-    m = n if full else 0
-    out = dict(
-        distance=_pool.empty(n),
-        sqr_distance=_pool.empty(m),
-        point=_pool.empty((m, 3)),
-        feature=_pool.empty(m, np.int8),
-        equidistant=_pool.empty(m, np.bool_),
-        height=_pool.empty(m),
-        radial=_pool.empty(m),
-    )
-    exact = np.zeros(n if method.exact_fallback else 0, np.bool_)
-    one = all(single_shape(view) for view in (C, U, R))
-    batch_kernel(method, one)(is_disk, C, U, N, R, P, n_j, *out.values(), exact, full)
-    if method.exact_fallback:
-        rows = np.flatnonzero(exact)
-        for k in rows:
-            i, j = divmod(int(k), n_j)
-            res = _exact_query(is_disk, C[i, j], U[i, j], N[i, j], R[i, j], P[i, j])
-            out["distance"][k] = res[0]
-            if full:
-                out["sqr_distance"][k], out["point"][k], out["feature"][k] = res[1], res[2:5], res[5]
-                out["equidistant"][k], out["height"][k], out["radial"][k] = res[6:9]
-        certified.count(n, len(rows))
-    return out
+    arrays = (center, unit_normal, normal, radius)
+    return run(LAYOUT, sys.modules[__name__], method, (is_disk,), arrays, points, out_shape, full)
+
+
+# The query of a stored row of a collection (see :mod:`proximity.primitives`):
+# bound per method, with the code of the disk kind.
+ROW_QUERY = None
+DISK_CODE = 1
+
+
+def _row(kind, q, k, px, py, pz):
+    """Stored row ``k`` of ``q``: center, unit normal, normal as given, radius."""
+    st, d, sqr, x, y, z, f, e, h, r = ROW_QUERY(
+        kind == DISK_CODE, q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5],
+        q[k, 6], q[k, 7], q[k, 8], q[k, 9], px, py, pz,
+    )  # fmt: skip
+    return st, d, sqr, x, y, z, f, h, r, math.nan, e
+
+
+def row_query(primitive, method):
+    """The query of a stored disk or circle row by ``method`` (see :mod:`proximity.primitives`)."""
+    query_ = KERNELS[method.name][0]
+    return specialize(_row, method.name, role="inline", ROW_QUERY=query_, DISK_CODE=DISK.code)
+
+
+def _interval(kind, q, k, px, py, pz):
+    """Bounds ``(lo, hi)`` on the certified distance of stored row ``k``
+    from the robust one: within ``8 eps S`` and one ulp of the exact one,
+    with ``S`` at most ``1.75`` times the largest coordinate difference
+    from the center (``sqrt(3)`` and rounding), plus ``R``."""
+    d = robust_query(
+        kind == DISK_CODE, q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5],
+        q[k, 6], q[k, 7], q[k, 8], q[k, 9], px, py, pz,
+    )[1]  # fmt: skip
+    m = max(max(abs(q[k, 0] - px), abs(q[k, 1] - py)), abs(q[k, 2] - pz))
+    w = 16.0 * EPS * (1.75 * m + q[k, 9]) + 5e-324  # the bound's absolute term, for subnormal distances
+    return d - w, d + w
+
+
+def row_interval(primitive):
+    """:func:`_interval` with the code of the disk kind bound."""
+    return specialize(_interval, "rows", role="inline", DISK_CODE=DISK.code)
+
+
+def shorter_than_one(u):
+    """The rows of ``u`` normalised and shortened by ``2^-40``, so that each is
+    no longer than 1 despite rounding; zero where not finite."""
+    # Any vector no longer than 1 gives a valid slab; shrink the rounded
+    # unit vector by far more than its rounding so that it is one.
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        length = np.sqrt(np.sum(u * u, axis=1, keepdims=True))
+        u = u / length * (1.0 - 2.0**-40)
+    return np.where(np.isfinite(u).all(axis=1, keepdims=True), u, 0.0)
+
+
+def slab(u, points):
+    """``(h_min, h_max)`` of ``u . X`` over ``points (n, k, 3)``; unbounded where it overflows."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        h = np.einsum("nkj,nj->nk", points, u)
+    ok = np.isfinite(h).all(axis=1)
+    return np.where(ok, h.min(axis=1), -np.inf), np.where(ok, h.max(axis=1), np.inf)
+
+
+def cull(code, params, rows, out):
+    """Box and slab of stored rows ``rows`` of ``params``, into ``out``; for
+    circles, also their loose boxes (returned), else None.
+
+    The box is the center plus or minus ``R sqrt(1 - u_a^2)`` on each axis
+    ``a``, computed as ``R sqrt(u_b^2 + u_c^2) / |u|`` so that no
+    cancellation enters (its rounding is a few ``eps`` of ``R``, inside the
+    pruning slack), and the slab that of the plane.  Loose boxes bound a
+    circle by the cube ``C +- R``, without a slab: the ``eberly`` method's
+    closest point can leave the plane near the axis.
+    """
+    c = params[rows, 0:3]
+    sq = params[rows, 3:6] ** 2
+    r = params[rows, 9:10]
+    # 1 - u_a^2 as the sum of the other two squares: subtracting from 1
+    # would cancel, and the square root would magnify that to sqrt(eps).
+    others = sq[:, [1, 2, 0]] + sq[:, [2, 0, 1]]
+    with np.errstate(over="ignore"):
+        extent = r * np.sqrt(others) / np.sqrt(sq.sum(axis=1, keepdims=True))
+        out[rows, 0:3] = c - extent
+        out[rows, 3:6] = c + extent
+    u = shorter_than_one(params[rows, 3:6])
+    out[rows, 6:9] = u
+    out[rows, 9], out[rows, 10] = slab(u, c[:, None, :])
+    if code != CIRCLE.code:
+        return None
+    loose = out[rows].copy()
+    with np.errstate(over="ignore"):
+        loose[:, 0:3] = c - r
+        loose[:, 3:6] = c + r
+    loose[:, 6:9] = 0.0
+    loose[:, 9] = -np.inf
+    loose[:, 10] = np.inf
+    return loose
+
+
+def resolve(code, params, point):
+    """The certified answers of stored rows ``params`` to ``point``, exact
+    fallback included: a dict of arrays, with ``extra`` and ``flag`` as a
+    stored row's answer holds them."""
+    r = query(CERTIFIED, code == DISK.code, params[:, 0:3], params[:, 3:6], params[:, 6:9], params[:, 9],
+              point, (len(params),), True)  # fmt: skip
+    extra = np.stack([r["height"], r["radial"], np.full(len(params), np.nan)], axis=1)
+    flag = r["equidistant"] & (code == CIRCLE.code)
+    return dict(r, extra=extra, flag=flag)
 
 
 # |n| of a normal whose largest component lies in this range is computed

@@ -54,13 +54,14 @@ embedded in the ``z = 0`` plane, which changes no distance.
 
 import functools
 import math
+import sys
 
 import numpy as np
-from numba import prange
-from numba.core import types
 
-from . import _exact, _pool, certified
+from . import _exact, certified
+from ._batch import Layout, run
 from ._fp import (
+    EPS,
     SAFE_MAX,
     SAFE_MIN,
     UNSCALED,
@@ -70,32 +71,25 @@ from ._fp import (
     pow2_scale,
     unscale,
 )
-from ._jit import address, function_at, inline, kernel, part, specialize
+from ._jit import inline, kernel, part, specialize
 from ._loops import (
-    A_IN3,
-    A_IN4,
     BLOCK,
     ONE_OK,
     ONE_OUT,
     ONE_P,
     ONE_ROWS,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT_FLAG,
     PAIR_OK,
     PAIR_OUT,
     PAIR_ROWS,
     gather_points,
     gather_triangles,
-    loop_views,
     point_at,
     scatter_triangles,
-    single_shape,
     store,
     triangle_at,
 )
-from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
+from .features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
+from .methods import CERTIFIED
 
 TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
 
@@ -560,7 +554,7 @@ _NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, ma
 
 
 @part
-def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
     """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
 
     Gathered into local scratch (the rows of ``PAIR_*``), computed by a loop
@@ -569,7 +563,7 @@ def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     it was not, and scattered to the outputs.
     """
     z = np.empty((PAIR_ROWS, BLOCK))
-    gather_triangles(z, V, P, n_j, k0, nb)
+    gather_triangles(z, shape.vertices, P, n_j, k0, nb)
     for q in range(BLOCK):
         v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         ax, ay, az = v0x - px, v0y - py, v0z - pz
@@ -591,7 +585,7 @@ def _robust_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
             store(z, PAIR_OUT, q, res)
         else:
             store(z, PAIR_OUT, q, _NAN_ROW)
-    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
+    scatter_triangles(z, PAIR_OUT, k0, nb, out, full)
 
 
 # The seed's method on pairs keeps the coefficients, then the choice of
@@ -601,7 +595,7 @@ _CHOICE = PAIR_OUT + 5
 
 
 @part
-def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+def _eberly_block(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_robust_block` for the seed's method: rows with a non-finite
     point are the only ones it leaves, and get NaN.
 
@@ -612,7 +606,7 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     to the stack (``docs/performance.md``).
     """
     z = np.empty((PAIR_ROWS, BLOCK))
-    gather_triangles(z, V, P, n_j, k0, nb)
+    gather_triangles(z, shape.vertices, P, n_j, k0, nb)
     for q in range(BLOCK):
         v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
@@ -648,11 +642,11 @@ def _eberly_block(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, ful
     for q in range(nb):
         if z[PAIR_OK, q] == 0.0:
             store(z, PAIR_OUT, q, _NAN_ROW)
-    scatter_triangles(z, PAIR_OUT, k0, nb, dist, sqr, point, feature, bary, full)
+    scatter_triangles(z, PAIR_OUT, k0, nb, out, full)
 
 
 @part
-def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full):
+def _eberly_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_eberly_block` for a batch against one triangle, ``V[0, 0]``.
 
     Only the points are gathered (the rows of ``ONE_*``).  The loop reads
@@ -662,7 +656,7 @@ def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact,
     """
     z = np.empty((ONE_ROWS, BLOCK))
     gather_points(z, ONE_P, P, n_j, k0, nb)
-    v = V[0, 0]
+    v = shape.vertices[0, 0]
     v0x, v0y, v0z, v1x, v1y, v1z = v[0, 0], v[0, 1], v[0, 2], v[1, 0], v[1, 1], v[1, 2]
     v2x, v2y, v2z = v[2, 0], v[2, 1], v[2, 2]
     for q in range(BLOCK):
@@ -673,7 +667,7 @@ def _eberly_block_one(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact,
     for q in range(nb):
         if z[ONE_OK, q] == 0.0:
             store(z, ONE_OUT, q, _NAN_ROW)
-    scatter_triangles(z, ONE_OUT, k0, nb, dist, sqr, point, feature, bary, full)
+    scatter_triangles(z, ONE_OUT, k0, nb, out, full)
 
 
 # Per method: the query of one point, and the block functions of the batch
@@ -684,43 +678,8 @@ KERNELS = {
     "eberly": (eberly_query, _eberly_block, _eberly_block_one),
 }
 
-_BLOCK_SIGNATURE = types.void(
-    A_IN4,
-    A_IN3,
-    types.int64,
-    types.int64,
-    types.int64,
-    OUT1,
-    OUT1,
-    OUT2,
-    OUT_FEATURE,
-    OUT2,
-    OUT_FLAG,
-    types.boolean,
-)
-# The batch loop: the block's address, then the block's arguments but ``k0, nb``.
-_BATCH_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[:3], *_BLOCK_SIGNATURE.args[5:])
-_block_at = function_at(_BLOCK_SIGNATURE)
-
-
-def _batch(block_address, V, P, n_j, dist, sqr, point, feature, bary, exact, full):
-    """Fill the flat outputs for an ``(I, J)`` loop over broadcast inputs.
-
-    ``V`` is ``(I, J, 3, 3)`` and ``P`` is ``(I, J, 3)`` with any strides
-    (zero along broadcast dimensions); output row ``k`` is loop index
-    ``(k // J, k % J)``.  With ``full=False`` only ``dist`` is written and
-    the other outputs may be empty.  Blocks of queries go to the threads,
-    each handled by the method's block function, called at
-    ``block_address`` (so that this loop compiles once for every method);
-    the certified method flags in ``exact`` the rows its filter could not
-    decide.
-    """
-    n = dist.shape[0]
-    block_fn = _block_at(block_address)
-    for block in prange((n + BLOCK - 1) // BLOCK):
-        k0 = block * BLOCK
-        nb = min(BLOCK, n - k0)
-        block_fn(V, P, n_j, k0, nb, dist, sqr, point, feature, bary, exact, full)
+#: The arrays of a batch query: the vertices, and the barycentrics of the answers.
+LAYOUT = Layout("triangle", flags=(), arrays=(("vertices", 2),), extra=(("barycentric", np.float64, 3),))
 
 
 def single_kernel(method):
@@ -729,38 +688,64 @@ def single_kernel(method):
     return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
 
 
+# The query of a stored row of a collection (see :mod:`proximity.primitives`):
+# bound per method.
+ROW_QUERY = None
+
+
+def _row(kind, q, k, px, py, pz):
+    """Stored row ``k`` of ``q``: the vertices V0, V1, V2."""
+    st, d, sqr, x, y, z, f, b0, b1, b2 = ROW_QUERY(
+        q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
+    )
+    return st, d, sqr, x, y, z, f, b0, b1, b2, False
+
+
+def row_query(primitive, method):
+    """The query of a stored triangle row by ``method`` (see :mod:`proximity.primitives`)."""
+    return specialize(_row, method.name, role="inline", ROW_QUERY=KERNELS[method.name][0])
+
+
+@inline
+def _interval(kind, q, k, px, py, pz):
+    """Bounds ``(lo, hi)`` on the certified distance of stored row ``k``
+    from the robust one: within ``8 eps S`` and one ulp of the exact one,
+    below ``2 eps S``, with ``S`` at most ``1.75`` times the largest
+    coordinate difference (``sqrt(3)`` and rounding)."""
+    d = robust(q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz)[0]
+    m = 0.0
+    for v in range(3):
+        m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
+    w = 16.0 * EPS * (1.75 * m) + 5e-324  # the bound's absolute term, for subnormal distances
+    return d - w, d + w
+
+
+def row_interval(primitive):
+    """:func:`_interval`, the bounds of a stored triangle row's certified distance."""
+    return _interval
+
+
+def resolve(code, params, point):
+    """The certified answers of stored rows ``params`` to ``point``, exact
+    fallback included: a dict of arrays, with ``extra`` and ``flag`` as a
+    stored row's answer holds them."""
+    r = query(CERTIFIED, params[:, :9].reshape(-1, 3, 3), point, (len(params),), True)
+    return dict(r, extra=r["barycentric"], flag=np.zeros(len(params), np.bool_))
+
+
 @functools.cache
-def batch_kernel(method, one):
-    """The compiled batch loop of ``method``, a function of the batch
-    arguments; ``one``: every query is against one triangle."""
-    block = KERNELS[method.name][2 if one else 1].py_func
-    block = specialize(block, block.__name__, _BLOCK_SIGNATURE, role="pointer")
-    loop = specialize(_batch, "blocks", _BATCH_SIGNATURE, parallel=True)
-    return functools.partial(loop, address(block, _BLOCK_SIGNATURE))
+def block(method, one):
+    """The block function of ``method``, called by the batch loop; ``one``:
+    every query is against one triangle."""
+    func = KERNELS[method.name][2 if one else 1].py_func
+    return specialize(func, func.__name__, LAYOUT.block_signature, role="pointer")
+
+
+def exact(vertices, point):
+    """The certified method's exact answer to one query, as a flat tuple of the outputs."""
+    return _exact.triangle(vertices, point)
 
 
 def query(method, vertices, points, out_shape, full):
     """Run the batch kernel of ``method``; inputs are validated float64 3D arrays."""
-    (V, P), n_j = loop_views(out_shape, [(vertices, 2), (points, 1)])
-    n = V.shape[0] * V.shape[1]
-    m = n if full else 0
-    out = dict(
-        distance=_pool.empty(n),
-        sqr_distance=_pool.empty(m),
-        point=_pool.empty((m, 3)),
-        feature=_pool.empty(m, np.int8),
-        barycentric=_pool.empty((m, 3)),
-    )
-    exact = np.zeros(n if method.exact_fallback else 0, np.bool_)
-    batch_kernel(method, single_shape(V))(V, P, n_j, *out.values(), exact, full)
-    if method.exact_fallback:
-        rows = np.flatnonzero(exact)
-        for k in rows:
-            i, j = divmod(int(k), n_j)
-            res = _exact.triangle(V[i, j], P[i, j])
-            out["distance"][k] = res[0]
-            if full:
-                out["sqr_distance"][k], out["feature"][k] = res[1], res[5]
-                out["point"][k], out["barycentric"][k] = res[2:5], res[6:9]
-        certified.count(n, len(rows))
-    return out
+    return run(LAYOUT, sys.modules[__name__], method, (), (vertices,), points, out_shape, full)

@@ -4,7 +4,7 @@ A :class:`Scene` is a flat list of primitives gathered from shapes (each shape
 may be a batch).  Triangles stay triangles and disks and circles stay
 analytic: nothing is tessellated.  Each query returns the nearest primitive's
 answer, computed by the same per-primitive method as a single-shape query
-(see :mod:`proximity.bvh`), with the index of that primitive.
+(see :mod:`proximity.broadphase`), with the index of that primitive.
 
 The broad phase is chosen once, at construction: brute force over every
 primitive for small scenes, a bounding-volume hierarchy above
@@ -13,11 +13,13 @@ primitive for small scenes, a bounding-volume hierarchy above
 
 import numpy as np
 
+from . import primitives
 from ._collection import BRUTE_FORCE_MAX, Collection
 from ._validate import frozen
-from .mesh import TriangleMesh
 from .results import SceneResult
-from .shapes import Circle, Disk, Triangle
+
+# The shapes a scene takes, for the messages.
+_NAMES = "Triangle, Disk, Circle or TriangleMesh"
 
 __all__ = ["BRUTE_FORCE_MAX", "Scene"]
 
@@ -68,24 +70,19 @@ class Scene(Collection):
     Scene([<Triangle batch_shape=(2,)>, <Disk batch_shape=()>], broad_phase='brute')
     """
 
-    __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds", "_has_circles")
+    __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds")
 
     def __init__(self, shapes, *, broad_phase="auto"):
-        if isinstance(shapes, (Triangle, Disk, Circle, TriangleMesh)) or not isinstance(
-            shapes, (list, tuple)
-        ):
-            raise TypeError(
-                "shapes must be a list or tuple of Triangle, Disk, Circle or TriangleMesh; "
-                f"got {type(shapes).__name__}"
-            )
+        if not isinstance(shapes, (list, tuple)):
+            raise TypeError(f"shapes must be a list or tuple of {_NAMES}; got {type(shapes).__name__}")
         kinds, params, counts, methods = _primitives(shapes)
         if sum(counts) == 0:
             raise ValueError(f"shapes must hold at least one primitive; got {len(shapes)} shapes with none")
         resolved, tree = self._tree_for(
             broad_phase,
             len(kinds),
-            lambda bvh: bvh.build(kinds, params),
-            lambda bvh: bvh.brute(kinds, params),
+            lambda bp: bp.build_tree(kinds, params),
+            lambda bp: bp.brute(kinds, params),
         )
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         offsets.flags.writeable = False
@@ -96,7 +93,6 @@ class Scene(Collection):
             methods=methods,
             _tree=tree,
             _kinds=frozen(kinds, dtype=np.int8, new=True),
-            _has_circles=bool((kinds == 2).any()),
         )
 
     def __len__(self):
@@ -121,17 +117,23 @@ class Scene(Collection):
         found = index >= 0
         source = np.where(found, np.searchsorted(self.offsets, index, side="right") - 1, -1)
         kind = self._kinds[np.where(found, index, 0)]
-        triangle = found & (kind == 0)
-        round_ = found & (kind != 0)
-        return SceneResult(
-            **fields,
-            primitive=index,
-            source=source,
-            barycentric=np.where(triangle[..., None], extra, np.nan),
-            height=np.where(round_, extra[..., 0], np.nan),
-            radial=np.where(round_, extra[..., 1], np.nan),
-            equidistant=flag & round_,
-        )
+        # Each kind's values from the columns of its answers (see
+        # :mod:`proximity.primitives`); NaN (False) where the nearest
+        # primitive is of another kind.
+        values = {}
+        for p in primitives.BY_CODE:
+            mine = found & (kind == p.code)
+            column = 0
+            for name, width in p.extra:
+                if width == 0:
+                    value, empty = flag, False
+                else:
+                    value = extra[..., column : column + width] if width > 1 else extra[..., column]
+                    column += width
+                    empty = np.nan
+                mask = mine[..., None] if width > 1 else mine
+                values[name] = np.where(mask, value, values.get(name, empty))
+        return SceneResult(**fields, primitive=index, source=source, **values)
 
 
 def _summary(shape):
@@ -148,32 +150,15 @@ def _primitives(shapes):
     kinds, params, counts = [], [], []
     methods = None
     for j, shape in enumerate(shapes):
-        if isinstance(shape, Triangle):
-            v = shape._vertices3.reshape(-1, 9)
-            kind = np.zeros(len(v), np.int8)
-            p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
-        elif isinstance(shape, TriangleMesh):
-            v = shape.triangles.reshape(-1, 9)
-            kind = np.zeros(len(v), np.int8)
-            p = np.concatenate([v, np.zeros((len(v), 1))], axis=1)
-        elif isinstance(shape, (Disk, Circle)):
-            batch = shape.batch_shape
-            c = np.broadcast_to(shape.center, batch + (3,)).reshape(-1, 3)
-            u = np.broadcast_to(shape._unit_normal, batch + (3,)).reshape(-1, 3)
-            n = np.broadcast_to(shape.normal, batch + (3,)).reshape(-1, 3)
-            r = np.broadcast_to(shape.radius, batch).reshape(-1, 1)
-            code = 1 if isinstance(shape, Disk) else 2
-            kind = np.full(len(c), code, np.int8)
-            p = np.concatenate([c, u, n, r], axis=1)
-        else:
-            raise TypeError(
-                f"shapes[{j}] must be a Triangle, Disk, Circle or TriangleMesh; got {type(shape).__name__}"
-            )
+        rows = getattr(shape, "_rows", None)
+        if rows is None:
+            raise TypeError(f"shapes[{j}] must be a {_NAMES}; got {type(shape).__name__}")
+        kind, p = rows()
         if len(kind):
             methods = shape.methods if methods is None else tuple(m for m in methods if m in shape.methods)
         kinds.append(kind)
         params.append(p)
         counts.append(len(kind))
     if not counts:
-        return np.zeros(0, np.int8), np.zeros((0, 10)), counts, methods
+        return np.zeros(0, np.int8), np.zeros((0, primitives.N_PARAMS)), counts, methods
     return np.concatenate(kinds), np.concatenate(params), counts, methods

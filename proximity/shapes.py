@@ -21,6 +21,7 @@ from ._validate import (
     require_finite,
 )
 from .methods import DEFAULT, REGISTRY, resolve
+from .primitives import CIRCLE, DISK, N_PARAMS, TRIANGLE
 from .results import (
     CircleResult,
     DiskResult,
@@ -328,6 +329,11 @@ class Triangle(_Facade):
         with _threads.kernel():
             return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
 
+    def _rows(self):
+        """``(kinds, params)`` of the batch, in C order, as a collection stores them."""
+        v = self._vertices3.reshape(-1, 9)
+        return _rows(TRIANGLE, v)
+
 
 class _Round(_Facade):
     __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal", "_args")
@@ -367,6 +373,17 @@ class _Round(_Facade):
 
     def __repr__(self):
         return format_repr(self, ("center", "normal", "radius"))
+
+    def _rows(self):
+        """``(kinds, params)`` of the batch, in C order, as a collection stores them."""
+        batch = self.batch_shape
+        columns = [
+            np.broadcast_to(self.center, batch + (3,)).reshape(-1, 3),
+            np.broadcast_to(self._unit_normal, batch + (3,)).reshape(-1, 3),
+            np.broadcast_to(self.normal, batch + (3,)).reshape(-1, 3),
+            np.broadcast_to(self.radius, batch).reshape(-1, 1),
+        ]
+        return _rows(DISK if self._is_disk else CIRCLE, np.concatenate(columns, axis=1))
 
     def _query(self, points, method, full):
         method, points, out_shape = self._prepare(points, method)
@@ -445,6 +462,13 @@ class Disk(_Round):
     _result = DiskResult
     _from_row = staticmethod(disk_from_row)
     _is_disk = True
+
+
+def _rows(primitive, params):
+    """``(kinds, params)`` of ``primitive`` rows, padded to the stored width."""
+    n = len(params)
+    padding = np.zeros((n, N_PARAMS - params.shape[1]))
+    return np.full(n, primitive.code, np.int8), np.concatenate([params, padding], axis=1)
 
 
 def _to_3d(array):

@@ -327,13 +327,13 @@ def test_shapes_pickle_copy_and_deepcopy(kind, monkeypatch):
     points = points_for(shape)
     expected = shape.closest_point(points)
     blob = pickle.dumps(shape)
-    from proximity import bvh
+    from proximity import broadphase
 
     def no_rebuild(*args, **kwargs):
         raise AssertionError("the tree was rebuilt")
 
-    monkeypatch.setattr(bvh, "build", no_rebuild)
-    monkeypatch.setattr(bvh, "brute", no_rebuild)
+    for name in ("build_tree", "build_faces", "brute"):
+        monkeypatch.setattr(broadphase, name, no_rebuild)
     for other in (pickle.loads(blob), copy.copy(shape), copy.deepcopy(shape)):
         assert type(other) is type(shape) and repr(other) == repr(shape)
         _same(expected, other.closest_point(points))

@@ -8,8 +8,9 @@ import pytest
 
 import proximity
 from benchmarks.meshes import box_points, icosphere, near_points, soup, torus
-from proximity import Feature, TriangleMesh
-from proximity import bvh as bvh_module
+from proximity import Feature, TriangleMesh, broadphase
+from proximity.broadphase import build as build_module
+from proximity.broadphase import refit as refit_module
 from proximity.scene import BRUTE_FORCE_MAX
 from proximity.testing import exact
 
@@ -63,14 +64,14 @@ def test_brute_force_and_bvh_agree_bit_for_bit(name, method):
     np.testing.assert_array_equal(brute.distance(points, method=method), bvh.distance(points, method=method))
 
 
-@pytest.mark.parametrize("leaf_size", [1, bvh_module.LEAF_SIZE, bvh_module.BUILD_SUBTREE + 1000])
+@pytest.mark.parametrize("leaf_size", [1, broadphase.LEAF_SIZE, build_module.BUILD_SUBTREE + 1000])
 def test_a_large_hierarchy_answers_as_brute_force_for_any_leaf_size(leaf_size):
     """20,480 faces, more than the build splits as whole subtrees and the
     refit fits as whole subtrees: the nodes above them take the other paths."""
     vertices, faces = icosphere(5)
-    assert len(faces) > max(bvh_module.BUILD_SUBTREE, bvh_module.REFIT_SUBTREE)
-    kinds, params = np.zeros(len(faces), np.int8), bvh_module.triangle_params(vertices, faces)
-    tree = bvh_module.build(kinds, params, leaf_size)
+    assert len(faces) > max(build_module.BUILD_SUBTREE, refit_module.REFIT_SUBTREE)
+    kinds, params = np.zeros(len(faces), np.int8), broadphase.face_params(vertices, faces)
+    tree = broadphase.build_tree(kinds, params, leaf_size)
     # Leaves hold at most leaf_size faces, and only nodes over more are split.
     size = tree.count.copy()
     for i in range(tree.nodes - 1, -1, -1):  # children come after their parent
@@ -79,7 +80,7 @@ def test_a_large_hierarchy_answers_as_brute_force_for_any_leaf_size(leaf_size):
     leaf = tree.count > 0
     assert size[leaf].max() <= leaf_size < size[~leaf].min() and size[0] == len(faces)
     assert tree.nodes > 1
-    brute = bvh_module.brute(kinds, params)
+    brute = broadphase.brute(kinds, params)
     points = np.concatenate(
         [
             near_points(np.random.default_rng(5), vertices, faces, 200, 0.02),
@@ -88,8 +89,8 @@ def test_a_large_hierarchy_answers_as_brute_force_for_any_leaf_size(leaf_size):
     )
     method = proximity.methods.resolve("robust")
     ours, theirs = (
-        bvh_module.nearest(tree, method, points, True),
-        bvh_module.nearest(brute, method, points, True),
+        broadphase.nearest(tree, method, points, True),
+        broadphase.nearest(brute, method, points, True),
     )
     for field in ("distance", "point", "feature", "extra", "index"):
         np.testing.assert_array_equal(ours[field], theirs[field], err_msg=field)

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import Circle, Disk, Scene, Triangle, TriangleMesh, bvh
+from proximity import Circle, Disk, Scene, Triangle, TriangleMesh, broadphase
+from proximity.broadphase import build as build_module
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -58,8 +59,9 @@ def _forbid_building(monkeypatch):
     def built(*args, **kwargs):
         raise AssertionError("a hierarchy was built on unpickling")
 
-    for name in ("build", "brute", "_build"):
-        monkeypatch.setattr(bvh, name, built)
+    for name in ("build_tree", "build_faces", "brute"):
+        monkeypatch.setattr(broadphase, name, built)
+    monkeypatch.setattr(build_module, "_build", built)
 
 
 def _assert_same_answers(shape, back, points):
@@ -76,7 +78,7 @@ def test_unpickled_collections_hold_the_same_tree_bit_for_bit_without_building_i
     blob = pickle.dumps(shape, protocol=pickle.HIGHEST_PROTOCOL)
     _forbid_building(monkeypatch)
     back = pickle.loads(blob)
-    for field in dataclasses.fields(bvh.Tree):
+    for field in dataclasses.fields(broadphase.Tree):
         a, b = getattr(shape._tree, field.name), getattr(back._tree, field.name)
         if isinstance(a, np.ndarray):
             assert a.dtype == b.dtype and a.shape == b.shape, field.name
@@ -162,7 +164,7 @@ def test_results_pickle_no_more_than_their_arrays(n):
 
 @pytest.mark.parametrize("start", ["fork", "spawn"])
 def test_workers_answer_for_shipped_collections_bit_for_bit_without_building(start, tmp_path):
-    # The workers' bvh cannot build a hierarchy: unpickling must not.
+    # The workers' broad phase cannot build a hierarchy: unpickling must not.
     # They send back whole results, which the parent compares field by field.
     script = tmp_path / "ship.py"
     script.write_text(
@@ -174,10 +176,11 @@ def test_workers_answer_for_shipped_collections_bit_for_bit_without_building(sta
             from test_shipping import collections
 
             def forbid():
-                from proximity import bvh
+                from proximity import broadphase
+                from proximity.broadphase import build
                 def built(*args, **kwargs):
                     raise AssertionError("built in a worker")
-                bvh.build = bvh.brute = bvh._build = built
+                broadphase.build_tree = broadphase.build_faces = broadphase.brute = build._build = built
 
             def work(args):
                 shape, points = args

@@ -1,0 +1,34 @@
+"""The broad phase: the nearest primitive of a collection, by brute force or down a hierarchy.
+
+A collection (a mesh or a scene) stores its primitives as rows of
+parameters with a kind code each (:mod:`proximity.primitives`); the
+distance from a point to it is the minimum, over the primitives, of the
+per-primitive method's computed distance, called with the same arguments
+as a single-shape query, so that a collection answers with exactly the bits
+the per-shape query gives for its nearest primitive.  Among primitives at
+the same computed distance the one with the lowest index wins; primitives
+whose method gives NaN (``eberly`` on a zero-area triangle) are passed
+over, and a row where every primitive gives NaN has no answer.
+
+Nothing here names a kind of primitive: each kind's kernel module answers
+for its rows.  One module per job:
+
+:mod:`.tree`
+    The :class:`Tree`: primitives in leaf order, nodes, bounds.
+:mod:`.build`
+    The hierarchy's build (binned SAH), brute force, duplicate rows.
+:mod:`.bounds`
+    Primitive and node bounds, and why pruning never changes an answer.
+:mod:`.refit`
+    Node bounds fitted to the primitives below.
+:mod:`.traverse`
+    The compiled search of one block of points.
+:mod:`.nearest`
+    The search of a batch, and the certified rows finished exactly.
+"""
+
+from .build import LEAF_SIZE, assemble, brute, build_faces, build_tree, face_params
+from .nearest import nearest
+from .tree import Tree
+
+__all__ = ["LEAF_SIZE", "Tree", "assemble", "brute", "build_faces", "build_tree", "face_params", "nearest"]

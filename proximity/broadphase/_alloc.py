@@ -1,0 +1,59 @@
+"""Memory for the build: large arrays without huge-page stalls, and row gathers."""
+
+import numpy as np
+from numba import prange
+
+from .._jit import kernel
+
+#: From this many rows on, :func:`take_rows` and :func:`triangle_params`
+#: (in the faces' own order) gather by compiled parallel loops; below, by
+#: NumPy, which loads no kernel (about 2 ms at a kernel's first call in a
+#: process, or its compile): a brute-force mesh compiles none of them.
+GATHER_MIN = 1 << 15
+
+
+#: The size (in float64s) from which NumPy asks for transparent huge pages: 4 MiB.
+HUGE_PAGE_MIN = 1 << 19
+
+
+@kernel()
+def _empty(rows, columns):
+    return np.empty((rows, columns))
+
+
+def empty(rows, columns):
+    """An uninitialised float64 array ``(rows, columns)`` for the build.
+
+    Large ones come from Numba's allocator.  NumPy asks the kernel to back
+    arrays of 4 MiB and more with transparent huge pages, and where the
+    kernel compacts memory to find them on demand, the first writes to
+    such an array can stall for a quarter of a second.
+    """
+    if rows * columns < HUGE_PAGE_MIN:
+        return np.empty((rows, columns))
+    return _empty(rows, columns)
+
+
+@kernel(parallel=True)
+def _take_rows(source, rows, out):
+    for m in prange(rows.shape[0]):
+        k = rows[m]
+        for c in range(source.shape[1]):
+            out[m, c] = source[k, c]
+
+
+def take_rows(source, rows):
+    """``source[rows]`` for a 2D float64 ``source``, as a new C-contiguous array."""
+    if len(rows) < GATHER_MIN:
+        return np.ascontiguousarray(source[rows])
+    out = empty(len(rows), source.shape[1])
+    _take_rows(readonly(source, np.float64), readonly(rows, np.int64), out)
+    return out
+
+
+def readonly(array, dtype):
+    """``array`` as a C-contiguous read-only array of ``dtype`` (a view where it already is one)."""
+    array = np.ascontiguousarray(array, dtype=dtype)
+    view = array.view()
+    view.flags.writeable = False
+    return view

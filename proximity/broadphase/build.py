@@ -1,0 +1,534 @@
+"""The build: a bounding-volume hierarchy over a collection's primitives.
+
+Hierarchy
+---------
+Built once, on primitive boxes, by binned surface-area heuristic (``BINS``
+bins on the centroids along their longest axis, splitting until a node holds at most
+``LEAF_SIZE`` primitives; nodes whose centroids coincide are cut in half by
+index).  The children of a node are adjacent in memory and come after it:
+the large nodes breadth first, then the subtree of each small one in a
+block of its own (see :func:`_build`).
+
+Brute force is the hierarchy of a single leaf holding every primitive in
+index order (:func:`brute`).  Exact copies of a primitive are not stored
+(:func:`distinct`).
+"""
+
+import math
+
+import numpy as np
+from numba import prange
+
+from .. import primitives
+from .._jit import inline, kernel
+from ._alloc import GATHER_MIN, empty, readonly, take_rows
+from .bounds import CULL_COLUMNS, plane_row, primitive_cull
+from .refit import refit
+from .tree import Tree
+
+LEAF_SIZE = 4
+BINS = 16
+
+
+@inline
+def _centroid(rows, j, a):
+    # Halves first: the sum of two coordinates near 1e308 would overflow.
+    return rows[j, a] * 0.5 + rows[j, 3 + a] * 0.5
+
+
+@inline
+def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
+    """Split node ``i`` (primitives ``child[i] .. + count[i]``) at its best
+    binned SAH plane, into nodes ``first_child`` and ``first_child + 1``.
+    The centroid bounds of node ``k`` are row ``k - base`` of ``cmin`` and
+    ``cmax``.
+
+    ``rows`` holds each primitive's box in its first six columns (low and
+    high corners), and its centroid is the box's center.  The centroids are
+    binned along the longest axis of their bounds, in the caller's work
+    array ``bins`` ``(BINS, 9)``: a count, a box, and the count and area
+    right of each bin.  The rows of ``rows`` and ``order`` are partitioned
+    in place (each node's rows are contiguous), and the children's centroid
+    bounds are gathered on the way.
+    """
+    start = child[i]
+    cnt = count[i]
+    end = start + cnt
+    columns = rows.shape[1]
+    axis = -1
+    widest = 0.0
+    for a in range(3):
+        extent = cmax[i - base, a] - cmin[i - base, a]
+        if extent > widest and extent < math.inf:
+            axis, widest = a, extent
+    best_axis = -1
+    best_bin = 0
+    scale, origin = 0.0, 0.0
+    if axis >= 0:
+        scale = BINS / widest
+        origin = cmin[i - base, axis]
+        for b in range(BINS):
+            bins[b, 0] = 0.0
+            for c in range(3):
+                bins[b, 1 + c] = math.inf
+                bins[b, 4 + c] = -math.inf
+        for j in range(start, end):
+            b = min(int((_centroid(rows, j, axis) - origin) * scale), BINS - 1)
+            bins[b, 0] += 1.0
+            for c in range(3):
+                bins[b, 1 + c] = min(bins[b, 1 + c], rows[j, c])
+                bins[b, 4 + c] = max(bins[b, 4 + c], rows[j, 3 + c])
+        # Sweep from the right, then from the left, costing each plane
+        # between bins b and b + 1 as area x count on either side.
+        xl, yl, zl = math.inf, math.inf, math.inf
+        xh, yh, zh = -math.inf, -math.inf, -math.inf
+        total = 0.0
+        for b in range(BINS - 1, 0, -1):
+            total += bins[b, 0]
+            xl, yl, zl = min(xl, bins[b, 1]), min(yl, bins[b, 2]), min(zl, bins[b, 3])
+            xh, yh, zh = max(xh, bins[b, 4]), max(yh, bins[b, 5]), max(zh, bins[b, 6])
+            dx, dy, dz = xh - xl, yh - yl, zh - zl
+            bins[b, 7] = total
+            bins[b, 8] = dx * dy + dy * dz + dz * dx if total > 0.0 else 0.0
+        xl, yl, zl = math.inf, math.inf, math.inf
+        xh, yh, zh = -math.inf, -math.inf, -math.inf
+        total = 0.0
+        best_cost = math.inf
+        for b in range(BINS - 1):
+            total += bins[b, 0]
+            xl, yl, zl = min(xl, bins[b, 1]), min(yl, bins[b, 2]), min(zl, bins[b, 3])
+            xh, yh, zh = max(xh, bins[b, 4]), max(yh, bins[b, 5]), max(zh, bins[b, 6])
+            if total == 0.0 or bins[b + 1, 7] == 0.0:
+                continue
+            dx, dy, dz = xh - xl, yh - yl, zh - zl
+            cost = (dx * dy + dy * dz + dz * dx) * total + bins[b + 1, 8] * bins[b + 1, 7]
+            if cost < best_cost:
+                best_cost = cost
+                best_axis = axis
+                best_bin = b
+    # The children's centroid bounds, left (l) and right (r).
+    lx0, ly0, lz0, lx1, ly1, lz1 = math.inf, math.inf, math.inf, -math.inf, -math.inf, -math.inf
+    rx0, ry0, rz0, rx1, ry1, rz1 = math.inf, math.inf, math.inf, -math.inf, -math.inf, -math.inf
+    if best_axis < 0:
+        # Coincident centroids (or costs beyond the float range): halves by index.
+        mid = start + cnt // 2
+        for j in range(start, end):
+            x, y, z = _centroid(rows, j, 0), _centroid(rows, j, 1), _centroid(rows, j, 2)
+            if j < mid:
+                lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
+                lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
+            else:
+                rx0, ry0, rz0 = min(rx0, x), min(ry0, y), min(rz0, z)
+                rx1, ry1, rz1 = max(rx1, x), max(ry1, y), max(rz1, z)
+    else:
+        a = best_axis
+        lo_j = start
+        hi_j = end - 1
+        while lo_j <= hi_j:
+            x, y, z = _centroid(rows, lo_j, 0), _centroid(rows, lo_j, 1), _centroid(rows, lo_j, 2)
+            h = x if a == 0 else (y if a == 1 else z)
+            if min(int((h - origin) * scale), BINS - 1) <= best_bin:
+                lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
+                lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
+                lo_j += 1
+            else:
+                rx0, ry0, rz0 = min(rx0, x), min(ry0, y), min(rz0, z)
+                rx1, ry1, rz1 = max(rx1, x), max(ry1, y), max(rz1, z)
+                # Swap rows lo_j and hi_j of every array kept in node order.
+                order[lo_j], order[hi_j] = order[hi_j], order[lo_j]
+                for c in range(columns):
+                    rows[lo_j, c], rows[hi_j, c] = rows[hi_j, c], rows[lo_j, c]
+                hi_j -= 1
+        mid = lo_j
+    left = first_child - base
+    right = first_child + 1 - base
+    cmin[left, 0], cmin[left, 1], cmin[left, 2] = lx0, ly0, lz0
+    cmax[left, 0], cmax[left, 1], cmax[left, 2] = lx1, ly1, lz1
+    cmin[right, 0], cmin[right, 1], cmin[right, 2] = rx0, ry0, rz0
+    cmax[right, 0], cmax[right, 1], cmax[right, 2] = rx1, ry1, rz1
+    child[first_child] = start
+    count[first_child] = mid - start
+    child[first_child + 1] = mid
+    count[first_child + 1] = end - mid
+    child[i] = first_child
+    count[i] = 0
+
+
+#: Nodes over at most this many primitives are split subtree by subtree,
+#: while their rows are in cache, rather than one level of the tree at a time.
+BUILD_SUBTREE = 4096
+
+
+@inline
+def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size):
+    """Split node ``root`` and its descendants down to the leaves, breadth
+    first, into nodes ``root + 1`` on, whose centroid bounds are rows of
+    ``cmin``, ``cmax`` from ``root`` on.  Returns the number of nodes, the
+    root included, and the depth of the deepest leaf below the root."""
+    last = root + 1
+    level_end = root + 1
+    depth = 0
+    i = root
+    while i < last:
+        if i == level_end:
+            depth += 1
+            level_end = last
+        if count[i] > leaf_size:
+            _split(i, last, child, count, rows, order, cmin, cmax, root, bins)
+            last += 2
+        i += 1
+    return last - root, depth
+
+
+@inline
+def _subtree_task(i, child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size):
+    """:func:`_split_subtree` for node ``i`` of the level-by-level split, in
+    the block of nodes at twice its first row, with scratch bounds."""
+    base = 2 * child[i]
+    scratch_min = np.empty((2 * BUILD_SUBTREE, 3))
+    scratch_max = np.empty((2 * BUILD_SUBTREE, 3))
+    bins = np.empty((BINS, 9))
+    block_child[base] = child[i]
+    block_count[base] = count[i]
+    for a in range(3):
+        scratch_min[0, a] = cmin[i, a]
+        scratch_max[0, a] = cmax[i, a]
+    return _split_subtree(
+        base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size
+    )
+
+
+@inline
+def _number_block(i, nodes, offset, child, block_child, block_count, out_child, out_count):
+    """Copy node ``i``'s block of ``nodes`` nodes into the tree: block node
+    ``base + t`` is node ``offset + t - 1``, and the root keeps its number."""
+    base = 2 * child[i]
+    for t in range(nodes):
+        k = i if t == 0 else offset + t - 1
+        if block_count[base + t] == 0:
+            out_child[k] = offset + block_child[base + t] - base - 1
+            out_count[k] = 0
+        else:
+            out_child[k] = block_child[base + t]
+            out_count[k] = block_count[base + t]
+
+
+@kernel(parallel=True)
+def _build(rows, leaf_size):
+    """Topology of a hierarchy over the boxes ``rows[:, 0:3]`` (low corners)
+    and ``rows[:, 3:6]`` (high corners), n >= 1 rows, whose rows it puts in
+    leaf order (every column, in place).
+
+    Returns ``(child, count, order, depth)``: the nodes as in
+    :func:`_nearest`, ``order[j]`` the primitive now at row ``j``, and the
+    largest depth of a leaf.
+
+    Binned SAH.  Nodes over more than :data:`BUILD_SUBTREE` primitives (and
+    more than ``leaf_size``) are split one level of the tree at a time, the nodes of a level in
+    parallel, each on its own contiguous rows, and numbered breadth first.
+    Each smaller node is then split down to its leaves as one task, in a
+    scratch block of nodes that its rows index (a node over rows ``s .. s +
+    c - 1`` has at most ``2 c - 1`` nodes in its subtree, so the block at
+    ``2 s`` is its own).  Its descendants are then numbered after the large
+    nodes, block after block: a node's children are adjacent and come after
+    it.
+    """
+    n = rows.shape[0]
+    cap = 2 * n - 1
+    # Every entry is written before it is read (np.zeros or np.arange
+    # would each be a parallel loop of its own to compile).
+    child = np.empty(cap, np.int64)
+    count = np.empty(cap, np.int64)
+    first_child = np.empty(cap, np.int64)
+    cmin = np.empty((cap, 3))
+    cmax = np.empty((cap, 3))
+    order = np.empty(n, np.int64)
+    for j in range(n):
+        order[j] = j
+    child[0] = 0
+    for a in range(3):
+        cmin[0, a] = math.inf
+        cmax[0, a] = -math.inf
+    for j in range(n):
+        for a in range(3):
+            cmin[0, a] = min(cmin[0, a], _centroid(rows, j, a))
+            cmax[0, a] = max(cmax[0, a], _centroid(rows, j, a))
+    count[0] = n
+    large = max(leaf_size, BUILD_SUBTREE)
+    n_nodes = 1
+    begin = 0
+    while begin < n_nodes:
+        end_level = n_nodes
+        for i in range(begin, end_level):
+            if count[i] > large:
+                first_child[i] = n_nodes
+                n_nodes += 2
+        # In chunks of nodes, each with its own work array for the bins.
+        size = max((end_level - begin) // 16, 1)
+        for chunk in prange((end_level - begin + size - 1) // size):
+            bins = np.empty((BINS, 9))
+            for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
+                if count[i] > large:
+                    _split(i, first_child[i], child, count, rows, order, cmin, cmax, np.int64(0), bins)
+        begin = end_level
+    # The depth of each of those nodes (set from its parent's: an array
+    # filled by NumPy here would be a parallel loop that Numba may fuse
+    # with a later one of the same length), and the ones left to split.
+    level = np.empty(n_nodes, np.int64)
+    level[0] = 0
+    roots = np.empty(n_nodes, np.int64)
+    n_roots = 0
+    deepest = 0
+    for k in range(n_nodes):
+        if count[k] == 0:
+            level[child[k]] = level[k] + 1
+            level[child[k] + 1] = level[k] + 1
+        elif count[k] > leaf_size:
+            roots[n_roots] = k
+            n_roots += 1
+        else:
+            deepest = max(deepest, level[k])
+    block_child = np.empty(2 * n, np.int64)
+    block_count = np.empty(2 * n, np.int64)
+    nodes = np.empty(n_roots, np.int64)
+    below = np.empty(n_roots, np.int64)
+    for r in prange(n_roots):
+        made, levels = _subtree_task(
+            roots[r], child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size
+        )
+        nodes[r] = made
+        below[r] = levels
+    total = n_nodes
+    offset = np.empty(n_roots, np.int64)
+    for r in range(n_roots):
+        offset[r] = total
+        total += nodes[r] - 1
+        deepest = max(deepest, level[roots[r]] + below[r])
+    out_child = np.empty(total, np.int64)
+    out_count = np.empty(total, np.int64)
+    for k in range(n_nodes):
+        out_child[k] = child[k]
+        out_count[k] = count[k]
+    for r in prange(n_roots):
+        _number_block(roots[r], nodes[r], offset[r], child, block_child, block_count, out_child, out_count)
+    return out_child, out_count, order, deepest
+
+
+
+@inline
+def _mix(x, word):
+    """``x`` with the 64-bit ``word`` mixed in: by a multiplication, which
+    carries low bits up, and a shift, which brings the high bits down again
+    (a multiplication alone leaves the hash's low bits blind to the words'
+    high bits, where floats that differ mostly differ)."""
+    x = (x ^ word) * np.uint64(0x9E3779B97F4A7C15)
+    return x ^ (x >> np.uint64(32))
+
+
+@kernel()
+def _row_hashes(kinds, bits):
+    """A 64-bit hash of each primitive's kind and parameter bits."""
+    n = bits.shape[0]
+    h = np.empty(n, np.uint64)
+    for k in range(n):
+        x = np.uint64(kinds[k])
+        for c in range(bits.shape[1]):
+            x = _mix(x, bits[k, c])
+        h[k] = x
+    return h
+
+
+
+@inline
+def _face_row(vertices, bits, faces, k, kind, cull, hashes):
+    i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
+    plane_row(
+        cull, k, vertices[i, 0], vertices[i, 1], vertices[i, 2], vertices[j, 0], vertices[j, 1],
+        vertices[j, 2], vertices[m, 0], vertices[m, 1], vertices[m, 2],
+    )  # fmt: skip
+    # The hash of the face's parameters (its kind, nine coordinates, a zero).
+    x = np.uint64(kind)
+    for v in range(3):
+        for a in range(3):
+            x = _mix(x, bits[faces[k, v], a])
+    hashes[k] = _mix(x, np.uint64(0))
+
+
+@kernel(parallel=True)
+def _face_rows(vertices, faces, kind, cull, hashes):
+    """:func:`primitive_cull` and :func:`_row_hashes` of the hulls of three
+    points ``faces`` of ``vertices`` (triangles), of kind ``kind``, in one
+    pass over the faces."""
+    bits = vertices.view(np.uint64)
+    for k in prange(faces.shape[0]):
+        _face_row(vertices, bits, faces, np.int64(k), kind, cull, hashes)
+
+
+
+def _all_different(hashes):
+    """Whether the hashes, which it sorts in place, are all different."""
+    hashes.sort()
+    return len(hashes) < 2 or bool((hashes[1:] != hashes[:-1]).all())
+
+
+def distinct(kinds, params):
+    """Which primitives to store: all but exact copies (the same kind and the
+    same bits) of a primitive with a lower index.
+
+    A copy gives the same answer to every query, bit for bit, and loses
+    every tie to the original, so it can never be the answer; stored, it
+    would be visited at every tie (a mesh of many identical faces would
+    visit them all for every point).
+    """
+    n = len(kinds)
+    bits = params.view(np.uint64)
+    keep = np.ones(n, np.bool_)
+    # Distinct hashes, the usual case, are seen by a sort of the hashes
+    # alone, several times faster than the stable sort of their order.
+    if _all_different(_row_hashes(kinds, bits)):
+        return keep
+    h = _row_hashes(kinds, bits)
+    order = np.argsort(h, kind="stable")
+    sorted_h = h[order]
+    starts = np.concatenate([[True], sorted_h[1:] != sorted_h[:-1]])
+    # The first of each run of equal hashes has the lowest index (the sort is
+    # stable); a later row that equals it bit for bit is a copy.
+    later = np.flatnonzero(~starts)
+    if len(later):
+        first = order[np.maximum.accumulate(np.where(starts, np.arange(n), 0))[later]]
+        rows = order[later]
+        same = (bits[rows] == bits[first]).all(axis=1) & (kinds[rows] == kinds[first])
+        keep[rows[same]] = False
+    return keep
+
+
+
+@inline
+def _face_params(vertices, faces, order, params, j):
+    k = order[j]
+    for v in range(3):
+        i = faces[k, v]
+        for a in range(3):
+            params[j, 3 * v + a] = vertices[i, a]
+    for c in range(9, params.shape[1]):
+        params[j, c] = 0.0
+
+
+@kernel(parallel=True)
+def _face_gather(vertices, faces, order, params):
+    for j in prange(order.shape[0]):
+        _face_params(vertices, faces, order, params, np.int64(j))
+
+
+def face_params(vertices, faces, order=None):
+    """The stored rows ``(F, primitives.N_PARAMS)`` of the faces ``faces`` of
+    ``vertices`` (those ``faces[order]``, if given), hulls of three points:
+    each face's nine coordinates, then zeros."""
+    if order is None and len(faces) < GATHER_MIN:
+        params = np.empty((len(faces), primitives.N_PARAMS))
+        # Gathered straight into the rows; the faces index the vertices.
+        np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
+        params[:, 9:] = 0.0
+        return params
+    order = np.arange(len(faces)) if order is None else order
+    params = empty(len(order), primitives.N_PARAMS)
+    _face_gather(
+        readonly(vertices, np.float64), readonly(faces, np.int64), readonly(order, np.int64), params
+    )
+    return params
+
+
+
+def assemble(kinds, params, index, child, count, depth, cull=None):
+    """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
+
+    ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
+    computed here when not given; the node bounds are fitted to them.
+    """
+    tight, loose = primitive_cull(kinds, params) if cull is None else cull
+    kinds = readonly(kinds, np.int8)
+    params = readonly(params, np.float64)
+    child = readonly(child, np.int64)
+    count = readonly(count, np.int64)
+    tight_ro = readonly(tight, np.float64)
+    bounds = readonly(refit(child, count, kinds, params, tight_ro), np.float64)
+    if loose is tight:
+        loose_ro, loose_bounds = tight_ro, bounds
+    else:
+        loose_ro = readonly(loose, np.float64)
+        loose_bounds = readonly(refit(child, count, kinds, params, loose_ro), np.float64)
+    return Tree(
+        kinds=kinds,
+        params=params,
+        index=readonly(index, np.int64),
+        child=child,
+        count=count,
+        bounds=bounds,
+        cull=tight_ro,
+        loose_bounds=loose_bounds,
+        loose_cull=loose_ro,
+        depth=int(depth),
+    )
+
+
+def brute(kinds, params):
+    """The broad phase of no hierarchy: one leaf holding every primitive, in order.
+
+    Parameters
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``, n >= 1
+    params : ndarray of float64, shape ``(n, N_PARAMS)``
+
+    Returns
+    -------
+    Tree
+    """
+    n = len(kinds)
+    return assemble(kinds, params, np.arange(n), readonly([0], np.int64), readonly([n], np.int64), 0)
+
+
+def build_tree(kinds, params, leaf_size=LEAF_SIZE):
+    """A bounding-volume hierarchy over the primitives, built once.
+
+    Parameters
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``, n >= 1
+    params : ndarray of float64, shape ``(n, N_PARAMS)``
+    leaf_size : int
+        Most primitives a leaf holds.
+
+    Returns
+    -------
+    Tree
+    """
+    keep = distinct(kinds, params)
+    kept = np.flatnonzero(keep)
+    if len(kept) < len(kinds):
+        kinds, params = kinds[kept], take_rows(params, kept)
+    tight, loose = primitive_cull(kinds, params)
+    # The build puts the rows of ``tight`` in leaf order; the others follow.
+    child, count, order, depth = _build(tight, int(leaf_size))
+    loose = tight if loose is tight else take_rows(loose, order)
+    index = order if len(kept) == len(keep) else kept[order]
+    kinds, params = kinds[order], take_rows(params, order)
+    return assemble(kinds, params, index, child, count, depth, (tight, loose))
+
+
+def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
+    """:func:`build_tree` for the faces ``faces`` of ``vertices`` (indices into
+    it), primitives of kind ``kind`` that are hulls of three points, without
+    their parameters in the faces' order: the faces' boxes, slabs and
+    hashes come from the vertices in one pass, and their parameters are
+    gathered once, in leaf order."""
+    vertices = readonly(vertices, np.float64)
+    faces = readonly(faces, np.int64)
+    n = len(faces)
+    cull = empty(n, CULL_COLUMNS)
+    hashes = np.empty(n, np.uint64)
+    _face_rows(vertices, faces, kind, cull, hashes)
+    kinds = np.full(n, kind, np.int8)
+    if not _all_different(hashes):
+        return build_tree(kinds, face_params(vertices, faces), leaf_size)
+    child, count, order, depth = _build(cull, int(leaf_size))
+    params = face_params(vertices, faces, order)
+    return assemble(kinds, params, order, child, count, depth, (cull, cull))

@@ -1,0 +1,168 @@
+"""The nearest stored primitive to each point of a batch, and the certified rows finished exactly."""
+
+import math
+
+import numba
+import numpy as np
+
+from .. import primitives
+from .._jit import kernel
+from ._alloc import readonly
+from .traverse import Outputs, TreeArrays, _gather, search_kernel
+
+#: Bits of each coordinate in the Morton codes of the points: a 128^3 grid.
+MORTON_BITS = 7
+
+
+@kernel()
+def _morton_order(points):
+    """The points in Morton order on a 128^3 grid over their finite bounding
+    box (points with a non-finite coordinate go to the last cell): the
+    sequence of their indices, stable within a cell.
+
+    The 21-bit codes are sorted by two passes of a radix sort, on their low
+    11 and high 10 bits.
+    """
+    n = points.shape[0]
+    low = np.full(3, math.inf)
+    high = np.full(3, -math.inf)
+    for i in range(n):
+        if math.isfinite(points[i, 0]) and math.isfinite(points[i, 1]) and math.isfinite(points[i, 2]):
+            for a in range(3):
+                low[a] = min(low[a], points[i, a])
+                high[a] = max(high[a], points[i, a])
+    top = (1 << MORTON_BITS) - 1
+    span = max(max(high[0] - low[0], high[1] - low[1]), high[2] - low[2])
+    inv = top / span if 0.0 < span < math.inf else 0.0
+    codes = np.empty(n, np.int64)
+    for i in range(n):
+        code = 0
+        for a in range(3):
+            g = (points[i, a] - low[a]) * inv
+            if not (g >= 0.0):  # NaN as well
+                g = 0.0 if g < 0.0 else float(top)
+            x = int(min(g, float(top)))
+            # Spread the bits of x to every third position.
+            for b in range(MORTON_BITS):
+                code |= ((x >> b) & 1) << (3 * b + a)
+        codes[i] = code
+    order = np.arange(n)
+    scratch = np.empty(n, np.int64)
+    for shift, width in ((0, 11), (11, 3 * MORTON_BITS - 11)):
+        mask = (1 << width) - 1
+        starts = np.zeros((1 << width) + 1, np.int64)
+        for i in range(n):
+            starts[((codes[order[i]] >> shift) & mask) + 1] += 1
+        for b in range(1 << width):
+            starts[b + 1] += starts[b]
+        for i in range(n):
+            k = order[i]
+            bucket = (codes[k] >> shift) & mask
+            scratch[starts[bucket]] = k
+            starts[bucket] += 1
+        order, scratch = scratch, order
+    return order
+
+
+#: Batches at least this large are queried in Morton order of the points.
+SORT_MIN = 4096
+
+
+def _visiting_order(points):
+    """Morton order of the points: neighbours in space are queried one after the other.
+
+    Consecutive queries then walk the same nodes and faces, which stay in
+    cache; with points in random order every query fetches its path from
+    memory.  The order changes only the time, never an answer.
+    """
+    if len(points) < SORT_MIN:
+        return np.arange(len(points))
+    return _morton_order(points)
+
+
+
+def nearest(tree, method, points, full, loose=False):
+    """Nearest primitive to each of the validated points ``(n, 3)``.
+
+    Parameters
+    ----------
+    tree : Tree
+    method : Method
+    points : ndarray of float64, shape ``(n, 3)``
+    full : bool
+        Whether to fill every output or only ``distance``.
+    loose : bool
+        Use the loose boxes (``eberly``).
+
+    Returns
+    -------
+    dict of ndarray
+        ``distance``, ``sqr_distance``, ``point``, ``feature``, ``extra``
+        (barycentric, or height and radial), ``flag`` (equidistant) and
+        ``index`` (the caller's index of the nearest primitive, -1 for none);
+        all but ``distance`` empty unless ``full``.
+    """
+    points = readonly(points, np.float64)
+    n = points.shape[0]
+    m = n if full else 0
+    out = Outputs(
+        distance=np.empty(n),
+        sqr_distance=np.empty(m),
+        point=np.empty((m, 3)),
+        feature=np.empty(m, np.int8),
+        extra=np.empty((m, 3)),
+        flag=np.empty(m, np.bool_),
+        index=np.empty(m, np.int64),
+        undecided=np.empty(n),
+    )
+    bounds, cull, magnitude = tree.boxes(loose)
+    arrays = TreeArrays(tree.kinds, tree.params, tree.index, cull, bounds, tree.child, tree.count)
+    order = readonly(_visiting_order(points), np.int64)
+    # Work per point varies by orders of magnitude (a point at the center of
+    # a sphere is equidistant from every face), so blocks are handed out
+    # one at a time rather than split evenly between threads up front.
+    # A tree of one kind gets a search compiled for that kind alone; any
+    # other, the one search for every kind (not one per combination).
+    kinds = tree.present if len(tree.present) == 1 else primitives.BY_CODE
+    with numba.parallel_chunksize(1):
+        search_kernel(method, kinds)(arrays, tree.depth, magnitude, points, order, out, full)
+    rows = np.flatnonzero(~np.isnan(out.undecided))
+    if len(rows):
+        _resolve(tree, rows, points, out, full, cull, bounds, magnitude)
+    result = out._asdict()
+    del result["undecided"]
+    return result
+
+
+
+def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
+    """Finish rows whose nearest primitive may be an undecided certified answer.
+
+    Every candidate within the row's bound goes through the per-shape
+    ``certified`` query, which runs the exact fallback where needed, so each
+    answer is the one a single-shape query gives; the least wins, ties to
+    the lowest index.
+    """
+    positions = np.empty(len(tree.kinds), np.int64)
+    for i in rows:
+        p = points[i]
+        bound = out.undecided[i]
+        found = _gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, p, bound, positions)
+        candidates = positions[:found]
+        answers = []  # (distance, caller's index, the kind's answers, row)
+        for primitive in tree.present:
+            chosen = candidates[tree.kinds[candidates] == primitive.code]
+            if len(chosen) == 0:
+                continue
+            r = primitive.kernels.resolve(primitive.code, tree.params[chosen], p)
+            for j, idx in enumerate(tree.index[chosen]):
+                if not np.isnan(r["distance"][j]):
+                    answers.append((float(r["distance"][j]), int(idx), r, j))
+        if not answers:
+            continue
+        d, idx, r, j = min(answers, key=lambda a: (a[0], a[1]))
+        out.distance[i] = d
+        if full:
+            out.index[i] = idx
+            for name in ("sqr_distance", "point", "feature", "extra", "flag"):
+                getattr(out, name)[i] = r[name][j]

@@ -1,0 +1,260 @@
+"""Node bounds, fitted to the primitives below each node.
+
+Each node has its box and an oriented box (three slabs); the pruning tests
+that read them, and why they never change an answer, are in
+:mod:`.bounds`.
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from .. import primitives
+from .._jit import inline, kernel
+from ._alloc import empty
+
+#: Each primitive kind's number of points it is the hull of, by code.
+_VERTICES = primitives.vertex_counts()
+
+
+#: Nodes over at most this many primitives are fitted subtree by subtree,
+#: while the subtree's primitives are in cache.
+REFIT_SUBTREE = 8192
+
+
+@inline
+def _rows(child, count, i):
+    """The stored primitives ``first .. last - 1`` under node ``i``."""
+    k = i
+    while count[k] == 0:
+        k = child[k]
+    first = child[k]
+    k = i
+    while count[k] == 0:
+        k = child[k] + 1
+    return first, child[k] + count[k]
+
+
+@kernel()
+def _refit_top(child, count):
+    """The tasks of :func:`refit`: ``(top, tasks, start, end)``.
+
+    ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
+    a node before its children; ``tasks`` the roots of the subtrees below
+    them (the root itself when it is no larger).  ``start`` and ``end``
+    are arrays over every node, set here for those: node ``i`` holds
+    stored primitives ``start[i] .. end[i] - 1``.
+    """
+    m = child.shape[0]
+    start = np.empty(m, np.int64)
+    end = np.empty(m, np.int64)
+    top = np.empty(m, np.int64)
+    tasks = np.empty(m, np.int64)
+    stack = np.empty(m + 1, np.int64)
+    n_top = 0
+    n_tasks = 0
+    stack[0] = 0
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        i = stack[sp]
+        first, last = _rows(child, count, i)
+        start[i], end[i] = first, last
+        if count[i] == 0 and last - first > REFIT_SUBTREE:
+            top[n_top] = i
+            n_top += 1
+            stack[sp] = child[i] + 1
+            stack[sp + 1] = child[i]
+            sp += 2
+        else:
+            tasks[n_tasks] = i
+            n_tasks += 1
+    return top[:n_top].copy(), tasks[:n_tasks].copy(), start, end
+
+
+@inline
+def _merge(bounds, i, rows, first, last):
+    """Node ``i``'s box and normal sum (columns 6-8) over ``rows[first:last]``,
+    which hold a box and a normal (sum) in the same columns: its primitives'
+    ``cull`` rows for a leaf, its two children's ``bounds`` otherwise."""
+    for a in range(3):
+        bounds[i, a] = math.inf
+        bounds[i, 3 + a] = -math.inf
+        bounds[i, 6 + a] = 0.0
+    for k in range(first, last):
+        for a in range(3):
+            bounds[i, a] = min(bounds[i, a], rows[k, a])
+            bounds[i, 3 + a] = max(bounds[i, 3 + a], rows[k, 3 + a])
+            bounds[i, 6 + a] += rows[k, 6 + a]
+
+
+@inline
+def _frame(bounds, i):
+    """Node ``i``'s axes from its normal sum: ``u`` the sum normalised and
+    shortened, ``v`` and ``w`` across it (:func:`_across`)."""
+    ux, uy, uz = bounds[i, 6], bounds[i, 7], bounds[i, 8]
+    length = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if length > 0.0 and length < math.inf:
+        shrink = (1.0 - 2.0**-40) / length
+        ux, uy, uz = ux * shrink, uy * shrink, uz * shrink
+    else:
+        ux, uy, uz = 0.0, 0.0, 0.0
+    vx, vy, vz, wx, wy, wz = _across(ux, uy, uz)
+    bounds[i, 6], bounds[i, 7], bounds[i, 8] = ux, uy, uz
+    bounds[i, 11], bounds[i, 12], bounds[i, 13] = vx, vy, vz
+    bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
+
+
+@inline
+def _across(ux, uy, uz):
+    """Two vectors ``v``, ``w`` that make with ``u`` an orthogonal frame of
+    vectors no longer than 1 (zero where ``u`` is zero).
+
+    ``v`` is ``u`` with its smallest component zeroed and the other two
+    swapped, one negated, which is perpendicular to ``u`` exactly; ``w`` is
+    ``u x v``.  Both are normalised and shortened as ``u`` is (see
+    :func:`_frame`), which leaves the frame's rounding far inside
+    the shortening.
+    """
+    if abs(ux) <= abs(uy) and abs(ux) <= abs(uz):
+        vx, vy, vz = 0.0, -uz, uy
+    elif abs(uy) <= abs(uz):
+        vx, vy, vz = uz, 0.0, -ux
+    else:
+        vx, vy, vz = -uy, ux, 0.0
+    wx, wy, wz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    lw = math.sqrt(wx * wx + wy * wy + wz * wz)
+    sv = (1.0 - 2.0**-40) / lv if lv > 0.0 else 0.0
+    sw = (1.0 - 2.0**-40) / lw if lw > 0.0 else 0.0
+    return vx * sv, vy * sv, vz * sv, wx * sw, wy * sw, wz * sw
+
+
+#: Columns of a node's bounds: its box ``(lo, hi)``, then three slabs
+#: ``(axis, h_min, h_max)`` on the orthogonal axes ``u``, ``v``, ``w``.
+NODE_COLUMNS = 21
+
+
+@inline
+def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
+    """The ranges of node ``i``'s three slabs over stored primitives ``first .. last - 1``.
+
+    A primitive that is the hull of points (``vertices[kind]`` of them, at
+    the start of its row) counts by its points, any other by the eight
+    corners of its box.
+    """
+    ux, uy, uz = bounds[i, 6], bounds[i, 7], bounds[i, 8]
+    vx, vy, vz = bounds[i, 11], bounds[i, 12], bounds[i, 13]
+    wx, wy, wz = bounds[i, 16], bounds[i, 17], bounds[i, 18]
+    lu, hu = math.inf, -math.inf
+    lv, hv = math.inf, -math.inf
+    lw, hw = math.inf, -math.inf
+    for k in range(first, last):
+        n = vertices[kinds[k]]
+        for c in range(n if n > 0 else 8):
+            if n > 0:
+                x, y, z = params[k, 3 * c], params[k, 3 * c + 1], params[k, 3 * c + 2]
+            else:
+                x = cull[k, 3 if c & 1 else 0]
+                y = cull[k, 4 if c & 2 else 1]
+                z = cull[k, 5 if c & 4 else 2]
+            h = ux * x + uy * y + uz * z
+            lu, hu = min(lu, h), max(hu, h)
+            h = vx * x + vy * y + vz * z
+            lv, hv = min(lv, h), max(hv, h)
+            h = wx * x + wy * y + wz * z
+            lw, hw = min(lw, h), max(hw, h)
+    for c, low, high in ((9, lu, hu), (14, lv, hv), (19, lw, hw)):
+        finite = math.isfinite(low) and math.isfinite(high)
+        bounds[i, c] = low if finite else -math.inf
+        bounds[i, c + 1] = high if finite else math.inf
+
+
+@inline
+def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, vertices):
+    """Every node of the subtree at ``root``: boxes and normal sums from the
+    leaves up, then, but for ``root`` itself, its frame and slab ranges."""
+    # A subtree over c primitives has at most 2 c - 1 nodes.
+    nodes = np.empty(2 * (end[root] - start[root]), np.int64)
+    stack = np.empty(2 * (end[root] - start[root]), np.int64)
+    n = 0
+    stack[0] = root
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        i = stack[sp]
+        nodes[n] = i
+        n += 1
+        if count[i] == 0:
+            stack[sp] = child[i] + 1
+            stack[sp + 1] = child[i]
+            sp += 2
+    # A node comes before its descendants: backwards, they are done first.
+    for t in range(n - 1, -1, -1):
+        i = nodes[t]
+        if count[i] > 0:
+            start[i] = child[i]
+            end[i] = child[i] + count[i]
+            _merge(bounds, i, cull, start[i], end[i])
+        else:
+            start[i] = start[child[i]]
+            end[i] = end[child[i] + 1]
+            _merge(bounds, i, bounds, child[i], child[i] + 2)
+    for t in range(1, n):
+        i = nodes[t]
+        _frame(bounds, i)
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+
+
+@kernel(parallel=True)
+def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, vertices):
+    """The bounds of every node (see :func:`refit`).
+
+    The subtrees at ``tasks`` are fitted one per task; then the boxes and
+    normal sums of the ``top`` nodes, children first; then the frames and
+    ranges of the top nodes and of the subtrees' roots, one per task.
+    """
+    for j in prange(tasks.shape[0]):
+        _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, vertices)
+    for t in range(top.shape[0] - 1, -1, -1):
+        _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
+    for j in prange(top.shape[0] + tasks.shape[0]):
+        i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
+        _frame(bounds, i)
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+
+
+def refit(child, count, kinds, params, cull):
+    """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+
+    Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
+    ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
+    slab directions (their normals), shortened by ``2^-40``, and ``v``,
+    ``w`` complete it to an orthogonal frame (:func:`_across`); each range
+    is that of ``axis . X`` over the points of primitives that are hulls of
+    points and over the corners of the other primitives' boxes, and an
+    overflowing range is unbounded.  A flat patch of faces gets a thin
+    box along its normal and a tight one across it, which prunes where the
+    axis-aligned box alone would not (a point over a tilted patch, or near
+    the center of a sphere).
+
+    The subtrees, and the nodes above them, are fitted on the threads.
+    """
+    if len(child) == 1:
+        # One leaf (brute force): the traversal goes straight to its
+        # primitives and never tests its bounds, which need only its box,
+        # the scale of the pruning tests; the slabs bound nothing.
+        bounds = np.zeros((1, NODE_COLUMNS))
+        bounds[0, 0:3] = cull[:, 0:3].min(axis=0)
+        bounds[0, 3:6] = cull[:, 3:6].max(axis=0)
+        bounds[0, 9::5] = -math.inf
+        bounds[0, 10::5] = math.inf
+        return bounds
+    top, tasks, start, end = _refit_top(child, count)
+    bounds = empty(len(child), NODE_COLUMNS)
+    # Tasks differ in size by orders of magnitude: handed out one at a time.
+    with numba.parallel_chunksize(1):
+        _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, _VERTICES)
+    return bounds

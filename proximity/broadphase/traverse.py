@@ -1,0 +1,299 @@
+"""The search: the nearest stored primitive to each point, down the hierarchy.
+
+The traversal visits the nearer child first and skips a node when a lower
+bound on the distance from the point to what it holds exceeds the best
+answer so far plus a slack (:mod:`.bounds` shows why that never changes the
+answer).  It is compiled per method and per set of kinds stored: the
+method's query of each kind's rows (``row_query`` of its kernel module, see
+:mod:`proximity.primitives`) is bound into it, and nothing else compiles.
+
+Certified
+---------
+Where the certified filter leaves a primitive's answer to its exact
+fallback (rational arithmetic, in Python), the kernel only knows an
+interval around it (``row_interval``, from ``robust``'s bound), and uses
+the interval's upper end to prune.  A point for which such a primitive
+could be the nearest is finished outside the kernel
+(:func:`proximity.broadphase.nearest.nearest`).
+"""
+
+import collections
+import functools
+import math
+
+import numpy as np
+from numba import prange
+from numba.core import types
+
+from .. import certified
+from .._jit import kernel, launcher, specialize
+from .bounds import SLACK, _bound_sqr, _culled, _scale
+
+BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
+NONE = -1  # the feature of a row with no answer
+
+#: The arrays of a tree that the search reads.
+TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bounds child count")
+#: The search's outputs; ``extra`` holds up to three of the primitive's
+#: result values and ``flag`` its boolean one (see :mod:`proximity.primitives`).
+Outputs = collections.namedtuple(
+    "Outputs", "distance sqr_distance point feature extra flag index undecided"
+)
+
+_C2F = types.Array(types.float64, 2, "C", readonly=True)
+_C1I = types.Array(types.int64, 1, "C", readonly=True)
+_OUT1 = types.Array(types.float64, 1, "C")
+_OUT2 = types.Array(types.float64, 2, "C")
+_TREE = types.NamedTuple(
+    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1I, _C2F, _C2F, _C1I, _C1I], TreeArrays
+)
+_OUTPUTS = types.NamedTuple(
+    [_OUT1, _OUT1, _OUT2, types.Array(types.int8, 1, "C"), _OUT2, types.Array(types.boolean, 1, "C"),
+     types.Array(types.int64, 1, "C"), _OUT1],
+    Outputs,
+)  # fmt: skip
+# (block, tree, depth, magnitude, points, order, outputs, full)
+_BLOCK_SIGNATURE = types.void(
+    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean
+)
+_LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
+
+# Bound per method and set of kinds by :func:`proximity._jit.specialize`:
+# the primitives' evaluation and interval (chains over the kinds, see
+# :func:`_chain`), whether the method has an exact fallback, and whether the
+# previous point's answer may seed the search.
+EVALUATE = INTERVAL = None
+EXACT_FALLBACK = False
+SEED_POINT = True
+# The links of a chain: the codes a link's kernel module answers for, its
+# function, and the rest of the chain.
+LOW = HIGH = 0
+ROW = NEXT = CALL = None
+
+
+def _search_block(block, tree, depth, magnitude, points, order, out, full):
+    """Nearest primitive to each point of ``block`` (points ``block * BLOCK``
+    on, in the sequence ``order``); with ``full=False`` only the distances
+    and ``undecided`` are written.
+
+    ``tree`` is a :data:`TreeArrays` record (the primitives in leaf order,
+    their cull rows, the nodes as :class:`~.tree.Tree` describes them),
+    ``magnitude`` the largest coordinate magnitude of the node boxes, and
+    ``out`` a :data:`Outputs` record.  Points are visited in the sequence
+    ``order``, so that consecutive queries walk the same part of the tree.
+
+    Certified answers the filter leaves undecided are not known here: such
+    a primitive only narrows ``[lo, hi]`` around its answer (from the robust
+    one), and where one could be the nearest, ``undecided[i]`` is set to the
+    distance bound below which candidates must be resolved exactly
+    (otherwise NaN).
+    """
+    kinds, params, index, cull, bounds, child, count = tree
+    dist, sqr, point, feature, extra, flag, prim, undecided = out
+    n = points.shape[0]
+    sentinel = index.shape[0]
+    stack_node = np.empty(depth + 1, np.int64)
+    stack_sqr = np.empty(depth + 1)
+    # The previous point's closest point, a point of the collection: points
+    # are visited in spatial order, so the distance to it is an upper bound
+    # on the next point's answer that prunes from the root down.
+    near_x, near_y, near_z = math.nan, math.nan, math.nan
+    for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
+        i = order[j]
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        best = math.inf
+        best_index = sentinel
+        best_k = -1
+        upper = math.inf  # least upper bound of the undecided answers
+        lowest = math.inf  # least lower bound of the undecided answers
+        # The winner's answer, kept as found rather than computed again.
+        w_sqr, w_x, w_y, w_z, w_a0, w_a1, w_a2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        w_feature = NONE
+        w_flag = False
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            s = _scale(px, py, pz, magnitude)
+            qx, qy, qz = px * s, py * s, pz * s
+            cap = math.inf  # scaled upper bound on the answer
+            if SEED_POINT and not math.isnan(near_x):
+                dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
+                cap = math.sqrt(dx * dx + dy * dy + dz * dz)
+            reach = cap + SLACK  # scaled distance beyond which primitives are skipped
+            limit = reach * reach  # its square, for the boxes
+            node = 0
+            sp = 0
+            while True:
+                first, c = child[node], count[node]
+                if c > 0:
+                    for k in range(first, first + c):
+                        if _culled(cull, k, s, qx, qy, qz, reach):
+                            continue
+                        r = EVALUATE(kinds, params, k, px, py, pz)
+                        certain = True
+                        if EXACT_FALLBACK:
+                            if r[0] != certified.CERTAIN:
+                                certain = False
+                                lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                                lowest = min(lowest, lo)
+                                upper = min(upper, hi)
+                        if certain:
+                            d = r[1]
+                            idx = index[k]
+                            if d < best or (d == best and idx < best_index):
+                                best = d
+                                best_index = idx
+                                best_k = k
+                                w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                                w_feature = r[6]
+                                w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                                w_flag = r[10]
+                        reach = min(min(best, upper) * s, cap) + SLACK
+                        limit = reach * reach
+                    node = -1
+                else:
+                    left = child[node]
+                    right = left + 1
+                    dl = _bound_sqr(bounds, left, s, qx, qy, qz)
+                    dr = _bound_sqr(bounds, right, s, qx, qy, qz)
+                    if dr < dl:
+                        left, right, dl, dr = right, left, dr, dl
+                    if dl <= limit:
+                        if dr <= limit:
+                            stack_node[sp] = right
+                            stack_sqr[sp] = dr
+                            sp += 1
+                        node = left
+                    else:
+                        node = -1
+                if node < 0:
+                    while sp > 0:
+                        sp -= 1
+                        if stack_sqr[sp] <= limit:
+                            node = stack_node[sp]
+                            break
+                    if node < 0:
+                        break
+        if best_k >= 0:
+            near_x, near_y, near_z = w_x, w_y, w_z
+        # An undecided answer could be the least (or tie with it): resolve
+        # every candidate up to the bound exactly, outside the kernel.
+        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
+        if best_k < 0:
+            dist[i] = math.nan
+            if full:
+                sqr[i] = math.nan
+                for c in range(3):
+                    point[i, c] = math.nan
+                    extra[i, c] = math.nan
+                feature[i] = NONE
+                flag[i] = False
+                prim[i] = -1
+            continue
+        dist[i] = best
+        if full:
+            sqr[i] = w_sqr
+            point[i, 0] = w_x
+            point[i, 1] = w_y
+            point[i, 2] = w_z
+            feature[i] = np.int8(w_feature)
+            extra[i, 0] = w_a0
+            extra[i, 1] = w_a1
+            extra[i, 2] = w_a2
+            flag[i] = w_flag
+            prim[i] = best_index
+
+
+
+def _loop(handle, tree, depth, magnitude, points, order, out, full):
+    """:func:`_search_block` for every block of points, on the threads."""
+    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
+        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full)
+
+
+def _link(kinds, q, k, px, py, pz):
+    kind = kinds[k]
+    if kind >= LOW and kind <= HIGH:
+        return ROW(kind, q, k, px, py, pz)
+    return NEXT(kinds, q, k, px, py, pz)
+
+
+def _last(kinds, q, k, px, py, pz):
+    return ROW(kinds[k], q, k, px, py, pz)
+
+
+def _chain(present, make, tag):
+    """One function ``f(kinds, params, k, px, py, pz)`` that calls, for stored
+    row ``k``, the function ``make(primitive)`` of its kind.
+
+    Kinds whose kernel module gives them the same function (disks and
+    circles) share one link, so that it is compiled once.
+    """
+    groups = []  # [function, low code, high code]
+    for p in present:
+        fn = make(p)
+        if groups and groups[-1][0] is fn and groups[-1][2] == p.code - 1:
+            groups[-1][2] = p.code
+        else:
+            groups.append([fn, p.code, p.code])
+    names = "_".join(p.name for p in present)
+    fn, low, high = groups[-1]
+    chain = specialize(_last, f"{tag}__{names}__{low}", role="inline", ROW=fn)
+    for fn, low, high in reversed(groups[:-1]):
+        bindings = dict(ROW=fn, NEXT=chain, LOW=low, HIGH=high)
+        chain = specialize(_link, f"{tag}__{names}__{low}", role="inline", **bindings)
+    return chain
+
+
+@functools.cache
+def search_kernel(method, present):
+    """The compiled search of ``method`` over trees holding the kinds
+    ``present`` (:class:`~proximity.primitives.Primitive` records), as a
+    function of the loop's arguments but the handle."""
+    tag = method.name
+    evaluate = _chain(present, lambda p: p.kernels.row_query(p, method), tag)
+    interval = _chain(present, lambda p: p.kernels.row_interval(p), "interval")
+    names = "_".join(p.name for p in present)
+    block = specialize(
+        _search_block,
+        f"{tag}__{names}",
+        _BLOCK_SIGNATURE,
+        role="pointer",
+        EVALUATE=evaluate,
+        INTERVAL=interval,
+        EXACT_FALLBACK=method.exact_fallback,
+        SEED_POINT=not method.loose,
+    )
+    return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
+
+
+@kernel()
+def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
+    """Stored primitives not culled at distance ``bound`` from ``p``, by the same tests as the search.
+
+    Writes their positions to ``out`` and returns how many.  Every primitive
+    whose computed distance is at most ``bound`` is among them.
+    """
+    px, py, pz = p[0], p[1], p[2]
+    s = _scale(px, py, pz, magnitude)
+    qx, qy, qz = px * s, py * s, pz * s
+    reach = bound * s + SLACK
+    limit = reach * reach
+    stack = np.empty(depth + 2, np.int64)
+    stack[0] = 0
+    sp = 1
+    found = 0
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if _bound_sqr(bounds, node, s, qx, qy, qz) > limit:
+            continue
+        if count[node] > 0:
+            for k in range(child[node], child[node] + count[node]):
+                if not _culled(cull, k, s, qx, qy, qz, reach):
+                    out[found] = k
+                    found += 1
+        else:
+            stack[sp] = child[node]
+            stack[sp + 1] = child[node] + 1
+            sp += 2
+    return found
+

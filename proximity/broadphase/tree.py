@@ -1,0 +1,71 @@
+"""A collection's broad phase: its primitives in leaf order and the nodes over them."""
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import primitives
+
+
+@dataclass(frozen=True, eq=False)
+class Tree:
+    """A broad phase: primitives in leaf order and the nodes over them.
+
+    Attributes
+    ----------
+    kinds : ndarray of int8, shape ``(n,)``
+        The kind code of each stored primitive (see :mod:`proximity.primitives`).
+    params : ndarray of float64, shape ``(n, N_PARAMS)``
+        Each stored primitive's parameters.
+    index : ndarray of int64, shape ``(n,)``
+        The caller's index of each stored primitive.
+    child, count : ndarray of int64, shape ``(m,)``
+        Node topology: node ``i`` is a leaf holding stored primitives
+        ``child[i] .. child[i] + count[i] - 1`` when ``count[i] > 0``, and
+        otherwise has children ``child[i]`` and ``child[i] + 1``; one leaf
+        for brute force.
+    bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
+        Node boxes and oriented boxes (see :func:`refit`).
+    cull : ndarray of float64, shape ``(n, 11)``
+        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``.
+    loose_bounds, loose_cull : ndarray of float64
+        The same for ``eberly`` (the same arrays unless there are circles).
+    depth : int
+        Depth of the deepest leaf.
+    """
+
+    kinds: np.ndarray
+    params: np.ndarray
+    index: np.ndarray
+    child: np.ndarray
+    count: np.ndarray
+    bounds: np.ndarray
+    cull: np.ndarray
+    loose_bounds: np.ndarray
+    loose_cull: np.ndarray
+    depth: int
+
+    @property
+    def nodes(self):
+        """Number of nodes; 1 for brute force."""
+        return len(self.child)
+
+    @functools.cached_property
+    def present(self):
+        """The kinds of primitive stored: :class:`~proximity.primitives.Primitive` records, in code order."""
+        return primitives.present(self.kinds)
+
+    @property
+    def loose(self):
+        """Whether the loose boxes differ from the tight ones."""
+        return self.loose_cull is not self.cull
+
+    def boxes(self, loose):
+        """``(node boxes, primitive culling data, magnitude)``, tight or loose."""
+        bounds, cull = (self.loose_bounds, self.loose_cull) if loose else (self.bounds, self.cull)
+        # A coordinate that overflowed leaves its box unbounded, which prunes
+        # nothing; the scale is set by the finite ones.
+        corners = np.abs(bounds[0, :6])
+        return bounds, cull, float(np.max(corners, where=np.isfinite(corners), initial=0.0))
+

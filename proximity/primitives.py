@@ -1,0 +1,113 @@
+"""The kinds of primitive a query can be made against, and what each one brings.
+
+The twin of :mod:`proximity.methods`: one :class:`Primitive` record per
+kind, in :data:`REGISTRY`.  The broad phase, scenes, the compile command,
+the adapters and the contract tests read these records and never name a
+kind; adding a primitive is its kernel module, its facade and result, and
+one line here (``docs/design.md`` walks through the segment).
+
+A primitive is stored in a collection (a mesh or a scene) as one row of
+parameters and its kind's ``code``; its first ``3 * vertices`` parameters
+are the points it is the convex hull of (none for disks and circles,
+which bound themselves by their box).  Its kernel module, imported at first
+use, provides for every method:
+
+``row_query(primitive, method)``
+    The query of one stored row, ``(kind, params, k, px, py, pz)`` to
+    ``(status, distance, sqr_distance, x, y, z, feature, a0, a1, a2, flag)``:
+    ``a`` holds up to three of the result's extra values (see ``extra``),
+    ``flag`` its boolean one.
+``row_interval(primitive)``
+    Bounds ``(lo, hi)`` on the certified distance of one stored row, from
+    the robust one, for the rows the certified filter leaves undecided.
+``cull(code, params, rows, out)``
+    Each row's box and slab (``rows`` of ``params``, into ``out``), and
+    the looser boxes of the ``eberly`` method where they differ.
+``resolve(code, params, point)``
+    The certified answers of rows, exact fallback included, as arrays.
+"""
+
+import importlib
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BY_CODE", "CIRCLE", "DISK", "REGISTRY", "TRIANGLE", "Primitive", "vertex_counts"]
+
+
+@dataclass(frozen=True, eq=False)
+class Primitive:
+    """A kind of primitive.
+
+    Attributes
+    ----------
+    name : str
+        Its name, as the facade's class is named in lower case.
+    code : int
+        Its kind code in a collection's rows.
+    width : int
+        Number of parameters of a stored row.
+    vertices : int
+        How many points, at the start of its row, it is the convex hull of
+        (0: it is bounded by its box).
+    module : str
+        Its kernel module in :mod:`proximity`, imported at first use.
+    extra : tuple of (str, int)
+        The result fields it carries in the ``a0 .. a2`` values of a stored
+        row's answer, with their widths; a width of 0 is the boolean flag.
+    methods : tuple of str
+        The methods it offers.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> t = proximity.primitives.REGISTRY["triangle"]
+    >>> t.code, t.width, t.extra
+    (0, 9, (('barycentric', 3),))
+    """
+
+    name: str
+    code: int
+    width: int
+    vertices: int
+    module: str
+    extra: tuple
+    methods: tuple = ("robust", "certified", "eberly")
+
+    @property
+    def kernels(self):
+        """Its kernel module (importing it loads the compiler)."""
+        return importlib.import_module(f"proximity.{self.module}")
+
+    def __repr__(self):
+        return f"Primitive({self.name!r})"
+
+
+TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),))
+DISK = Primitive("disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)))
+CIRCLE = Primitive("circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)))
+
+#: Every primitive, by name, in code order.
+REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE)}
+
+#: Every primitive, indexed by its code.
+BY_CODE = tuple(sorted(REGISTRY.values(), key=lambda p: p.code))
+assert [p.code for p in BY_CODE] == list(range(len(BY_CODE))), "codes must be 0, 1, 2, ..."
+
+#: Columns of a collection's parameter rows: the widest primitive's.
+N_PARAMS = max(p.width for p in BY_CODE)
+
+
+def vertex_counts():
+    """``vertices`` of every primitive, indexed by code: an int64 array for the kernels."""
+    counts = np.array([p.vertices for p in BY_CODE], np.int64)
+    counts.flags.writeable = False
+    return counts
+
+
+def present(kinds):
+    """The primitives among the codes ``kinds``, in code order."""
+    if len(kinds) == 0:
+        return ()
+    counts = np.bincount(kinds, minlength=len(BY_CODE))
+    return tuple(p for p in BY_CODE if counts[p.code])
