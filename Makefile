@@ -9,7 +9,7 @@ CORE_STAMP := $(CORE)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
 PEERS_STAMP := $(VENV)/.installed-peers
 
-.PHONY: test bench bench-quick docs clean clean-cache
+.PHONY: test bench bench-quick docs numba-floor clean clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -42,7 +42,21 @@ $(CORE_STAMP): $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m ruff check proximity adapters benchmarks tests
-	$(BIN)/python -m pytest proximity adapters tests README.md
+	$(BIN)/python -m pytest proximity adapters tests benchmarks/test_benchmarks.py README.md
+
+# The oldest Numba that pyproject.toml accepts, in an environment of its own
+# (with the NumPy that Numba version takes): every path of every shape must
+# answer with the bits of the pinned Numba in .venv.
+NUMBA_FLOOR := $(shell sed -n 's/.*"numba>=\([0-9.]*\),.*/\1/p' pyproject.toml)
+FLOOR := .venv-numba-floor
+
+numba-floor: $(STAMP)
+	rm -rf $(FLOOR)
+	$(PYTHON) -m venv $(FLOOR)
+	$(FLOOR)/bin/python -m pip install --quiet -e . "numba==$(NUMBA_FLOOR).*"
+	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
+	NUMBA_CACHE_DIR=$(FLOOR)/cache $(FLOOR)/bin/python -m proximity.testing.smoke $(FLOOR)/floor.npz \
+		--compare $(FLOOR)/pinned.npz
 
 # A regular install byte-compiles the package; an editable one leaves that to
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
@@ -69,7 +83,7 @@ docs: $(DOCS_STAMP)
 	@echo "API reference: docs/_build/html/index.html"
 
 clean:
-	rm -rf $(VENV) $(CORE) bench-results .pytest_cache docs/_build
+	rm -rf $(VENV) $(CORE) $(FLOOR) bench-results .pytest_cache docs/_build
 
 # Numba's cache of compiled kernels (index .nbi and data .nbc files), kept in
 # __pycache__ beside the sources; the next import compiles them again.

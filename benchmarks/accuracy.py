@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import proximity
-from proximity.testing import exact, scenes
+from proximity.testing import scenes
+from proximity.testing.accuracy import errors, reference, shape_of, ulp_errors  # noqa: F401
 
 METHODS = ("eberly", "robust")
 
@@ -32,40 +32,6 @@ class Accuracy:
     nan: int
     inf: int
     n: int
-
-
-def shape_of(kind, scene):
-    """The proximity shape of ``kind`` ("triangle", "disk", "circle") for a scene."""
-    if kind == "triangle":
-        return proximity.Triangle(scene.vertices)
-    cls = proximity.Disk if kind == "disk" else proximity.Circle
-    return cls(scene.center, scene.normal, scene.radius)
-
-
-def reference(kind, scene):
-    """Exact distances and scales ``S`` of a scene's queries, as mpmath numbers."""
-    if kind == "triangle":
-        rows = zip(scene.vertices, scene.points, strict=True)
-        return [(exact.triangle_distance(v, p), exact.triangle_scale(v, p)) for v, p in rows]
-    distance = exact.disk_distance if kind == "disk" else exact.circle_distance
-    rows = zip(scene.center, scene.normal, scene.radius, scene.points, strict=True)
-    return [(distance(c, n, r, p), exact.circle_scale(c, r, p)) for c, n, r, p in rows]
-
-
-def errors(distances, ref):
-    """Errors of float distances in units of ``eps * S``; inf where not finite."""
-    return np.array(
-        [exact.error_in_units(float(d), d_exact, s) for d, (d_exact, s) in zip(distances, ref, strict=True)]
-    )
-
-
-def ulp_errors(distances, ref):
-    """Errors of float distances in ulps of the exact distance ``d*``; inf where not finite.
-
-    Where ``d* == 0`` the unit is the smallest subnormal, so that only an
-    exact zero is 0 ulps (see :func:`proximity.testing.exact.ulps`).
-    """
-    return np.array([exact.ulps(float(d), d_exact) for d, (d_exact, _) in zip(distances, ref, strict=True)])
 
 
 def measure(kind, family, n, seed, methods=METHODS):

@@ -83,8 +83,7 @@ class Proximity(Peer):
 
     def warm(self):
         import proximity
-
-        from .meshes import icosphere
+        from proximity.testing.meshes import icosphere
 
         mesh = proximity.TriangleMesh(*icosphere(1))
         mesh.distance(np.zeros((2, 3)))

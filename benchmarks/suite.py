@@ -49,6 +49,7 @@ import numpy as np
 import proximity
 from benchmarks import accuracy
 from proximity import adapters
+from proximity.testing import accuracy as testing_accuracy
 from proximity.testing import scenes
 
 SCHEMA = 1
@@ -121,7 +122,7 @@ class Config:
         Whether this is the smoke run; recorded with the results.
     """
 
-    n_accuracy: int = 200
+    n_accuracy: int = testing_accuracy.N
     scene: int = 1 << 17
     batch: int = 1 << 19
     call_max: int = 4096
@@ -131,7 +132,7 @@ class Config:
     segments: tuple = (6, 12, 24, 48, 96, 192, 384, 768, 1536, 3072)
     n_tessellation: int = 32
     tessellation_budget: float = 2.0
-    seed: int = 0
+    seed: int = testing_accuracy.SEED
     quick: bool = False
 
 

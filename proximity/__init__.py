@@ -4,9 +4,41 @@ Point-triangle, point-circle and point-disk distance, on single points and
 NumPy batches, behind one shape protocol.
 """
 
+import importlib.machinery
+import os
+import sys
+
 from . import _threads
 
 _threads.configure()  # before any kernel: Numba picks its threading layer once
+
+
+class _SourceTreeAdapters:
+    """Finds ``proximity.adapters`` in the top-level ``adapters/`` of a source
+    checkout, as an install maps it, where the checkout's ``proximity/`` is
+    imported rather than the installed one (Python started in the clone's root)."""
+
+    def __init__(self, root):
+        self.root = root
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != f"{__name__}.adapters":
+            return None
+        return importlib.machinery.PathFinder.find_spec(fullname, [self.root])
+
+
+def _map_source_adapters():
+    here = os.path.dirname(os.path.abspath(__file__))
+    root = os.path.dirname(here)
+    installed = os.path.isdir(os.path.join(here, "adapters"))
+    checkout = os.path.isfile(os.path.join(root, "adapters", "__init__.py")) and os.path.isfile(
+        os.path.join(root, "pyproject.toml")
+    )
+    if checkout and not installed:
+        sys.meta_path.append(_SourceTreeAdapters(root))
+
+
+_map_source_adapters()
 
 from . import _pool  # noqa: E402
 from ._counts import stats as certified_stats  # noqa: E402

@@ -268,20 +268,3 @@ def test_the_module_runs_as_a_command(files, tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     assert "3 of 20,000 rows" in done.stderr
     assert np.load(out).tobytes() == _expected(files["stl"], files["points"]).distance.tobytes()
-
-
-def test_the_scale_benchmark_runs_and_deletes_its_files(tmp_path):
-    from benchmarks import scale
-
-    data = tmp_path / "data"
-    data.mkdir()
-    args = ["--quick", "--points", "30000", "--chunk", "7000", "--dir", str(data), "--out", str(tmp_path)]
-    assert scale.main(args) == 0
-    assert list(data.iterdir()) == []
-    raw = json.loads((tmp_path / "scale.json").read_text())
-    assert raw["unpickle_builds"] == 0 and raw["faces"] == 20_480
-    runs = raw["runs"]
-    assert [r["points"] for r in runs.values()] == [30_000, 30_000, 3_000]
-    assert len(runs["command, LocalCluster(2)"]["peak_rss_bytes"]["workers"]) == 2
-    table = (tmp_path / "scale.md").read_text().splitlines()
-    assert sum(line.startswith("| command") for line in table) == 3

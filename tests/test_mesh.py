@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 import proximity
-from benchmarks.meshes import box_points, icosphere, near_points, soup, torus
 from proximity import Feature, TriangleMesh, broadphase
 from proximity.broadphase import build as build_module
 from proximity.broadphase import refit as refit_module
 from proximity.scene import BRUTE_FORCE_MAX
 from proximity.testing import exact
+from proximity.testing.meshes import box_points, icosphere, near_points, soup, torus
 
 EPS = 2.0**-52
 METHODS = list(TriangleMesh.methods)

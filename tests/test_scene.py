@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import proximity
-from benchmarks.meshes import icosphere
 from proximity import Circle, Disk, Feature, Scene, Triangle, TriangleMesh
+from proximity.testing.meshes import icosphere
 
 FIELDS = (
     "distance",

@@ -12,9 +12,9 @@ import pickle
 import numpy as np
 import pytest
 
-from benchmarks.meshes import box_points, near_points
 from proximity import TriangleMesh, _signed
 from proximity.testing import exact
+from proximity.testing.meshes import box_points, near_points
 
 trimesh = pytest.importorskip("trimesh")
 

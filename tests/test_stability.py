@@ -25,12 +25,11 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks import accuracy, suite
-from proximity.testing import scenes
+from proximity.testing import accuracy, scenes
 
 #: The accuracy batches of the benchmark's default run, query for query.
-N = suite.DEFAULT.n_accuracy
-SEED = suite.DEFAULT.seed
+N = accuracy.N
+SEED = accuracy.SEED
 
 #: Each guaranteed method's bound, as ``(unit, limit)``.  Every answer must be
 #: strictly within a ``certified`` limit (faithful rounding) and at most a

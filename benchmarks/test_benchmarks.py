@@ -1,8 +1,13 @@
-"""The benchmark summary never states an error where d* = 0 in ulps of 0."""
+"""Tests of the benchmark's own code (``make test`` runs them from a clone).
 
+The summary never states an error where d* = 0 in ulps of 0; the
+point-cloud benchmark runs and cleans up after itself.
+"""
+
+import json
 import math
 
-from benchmarks import summary
+from benchmarks import scale, summary
 
 
 def _record(eps_s, ulps, failed=None):
@@ -41,3 +46,18 @@ def test_without_exact_distances_every_answered_row_counts():
     s = summary.stats([record])
     assert s.worst["error_ulps"] == 1e300
     assert s.on_shape == 0
+
+
+def test_the_scale_benchmark_runs_and_deletes_its_files(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    args = ["--quick", "--points", "30000", "--chunk", "7000", "--dir", str(data), "--out", str(tmp_path)]
+    assert scale.main(args) == 0
+    assert list(data.iterdir()) == []
+    raw = json.loads((tmp_path / "scale.json").read_text())
+    assert raw["unpickle_builds"] == 0 and raw["faces"] == 20_480
+    runs = raw["runs"]
+    assert [r["points"] for r in runs.values()] == [30_000, 30_000, 3_000]
+    assert len(runs["command, LocalCluster(2)"]["peak_rss_bytes"]["workers"]) == 2
+    table = (tmp_path / "scale.md").read_text().splitlines()
+    assert sum(line.startswith("| command") for line in table) == 3
