@@ -25,9 +25,10 @@ _MAX = Fraction(float.fromhex("0x1.fffffffffffffp+1023"))
 
 def _float(x):
     """The float nearest a Fraction (correctly rounded), inf beyond the range."""
-    if abs(x) > _MAX:
+    try:
+        return float(x)  # correctly rounded, up to the largest float's half ulp above it
+    except OverflowError:
         return math.inf if x > 0 else -math.inf
-    return float(x)
 
 
 def _sqrt_bounds(x, bits):
