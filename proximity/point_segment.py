@@ -210,7 +210,8 @@ def certified(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz):
     ``status`` :data:`~.certified.CERTAIN` (a faithfully rounded distance and
     the exact feature; a point on the segment gets exactly 0) or
     :data:`~.certified.EXACT` (the other values are then meaningless).  The
-    closest point and ``t`` are computed in float.
+    closest point and ``t`` are computed in float, as the robust method's;
+    the point is exactly ``V0`` where ``t == 0`` and ``V1`` where ``t == 1``.
     """
     nan = math.nan
     fail = (EXACT, nan, nan, nan, nan, nan, NONE, nan)
@@ -243,8 +244,10 @@ def certified(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz):
     status, d, s = settle(ok, d, s, g)
     if status != CERTAIN:
         return fail
+    # An endpoint exactly, as the robust method; t is 0 or 1 on VERTEX0 and
+    # VERTEX1, and may round to it on EDGE01.
     x, y, z = px + x * g, py + y * g, pz + z * g
-    x = v0x if code == VERTEX0 else (v1x if code == VERTEX1 else x)
-    y = v0y if code == VERTEX0 else (v1y if code == VERTEX1 else y)
-    z = v0z if code == VERTEX0 else (v1z if code == VERTEX1 else z)
+    x = v0x if t == 0.0 else (v1x if t == 1.0 else x)
+    y = v0y if t == 0.0 else (v1y if t == 1.0 else y)
+    z = v0z if t == 0.0 else (v1z if t == 1.0 else z)
     return CERTAIN, d, s, x, y, z, float(code), t
