@@ -68,6 +68,11 @@ PRED4 = 40.0 * U
 CERTAIN = 0.0
 EXACT = 1.0
 
+# Below this, a double-double's low part is subnormal and the relative error
+# bounds of the double-double operations fail (2^-969 and under, with room
+# for the few operations that follow).
+DD_MIN = 2.0**-960
+
 
 @inline
 def _sign(value, bound):
@@ -160,10 +165,15 @@ def _norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
 
 @inline
 def _ratio(nh, nl, dn, mh, ml, dm):
-    """``n / m`` and its error bound, from the bounds of both."""
+    """``n / m`` and its error bound, from the bounds of both.
+
+    No bound (inf) where ``n`` or ``m`` is below :data:`DD_MIN`: their
+    relative bounds do not hold there, and the quotient may have
+    underflowed to a zero that would pass for an exact one.
+    """
     qh, ql = dd.div(nh, nl, mh, ml)
     rel = dn / abs(nh) + dm / abs(mh) + 32.0 * U * U
-    return qh, ql, 2.0 * rel * abs(qh) if nh != 0.0 else math.inf
+    return qh, ql, 2.0 * rel * abs(qh) if (abs(nh) >= DD_MIN) & (abs(mh) >= DD_MIN) else math.inf
 
 
 @inline
