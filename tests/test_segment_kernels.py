@@ -132,7 +132,8 @@ def judge(vertices, points):
         d, _, x, y, z, feature, t = robust[k]
         closest = (x, y, z)[:dim]
         checks.check_segment(v, p, d, closest, Feature(int(feature)), t)
-        # The robust method names its feature by t.
+        # The robust method names its feature by t, and 0 is +0.0.
+        assert math.copysign(1.0, t) == 1.0, where
         assert (t == 0.0) == (feature == Feature.VERTEX0), where
         assert (t == 1.0) == (feature == Feature.VERTEX1), where
 
@@ -141,7 +142,7 @@ def judge(vertices, points):
         assert exact.ulps(xd, ref.distance) < 1.0, where
         assert xf == ref.feature, (xf, set(ref.features), where)
         assert xs == _rounded(ref.sqr_distance), where
-        assert xt == float(ref.t), where
+        assert xt == float(ref.t) and math.copysign(1.0, xt) == 1.0, where
         assert [xx, xy, xz][:dim] == [float(c) for c in ref.point], where
         assert xd == 0.0 or ref.sqr_distance != 0, where
 
@@ -314,6 +315,22 @@ def test_points_far_from_short_segments():
     judge(v, p)
     # A point far from a short segment far from the origin.
     judge(v * 2.0**-250 + 3.0, 3.0 + _unit(rng, n))
+
+
+def test_distances_far_below_the_query_size():
+    """Distances 1e-163 to 1e-150 of a query of size 1, in the interior and
+    at an endpoint: the double-double bounds fail below 2^-960 of S^2, and
+    an edge's quotient can underflow to a false exact zero (about 1e-162
+    here, where the squared distance is the smallest subnormals)."""
+    rng = np.random.default_rng(15)
+    n = 40
+    tilt = 10.0 ** np.concatenate([rng.uniform(-163, -161, n // 2), rng.uniform(-161, -150, n // 2)])
+    v = np.zeros((2 * n, 2, 3))
+    v[:n, 0, 1], v[:n, 0, 2], v[:n, 1, 1] = rng.uniform(0.5, 2, n), tilt, -rng.uniform(0.5, 2, n)
+    v[n:, 0, 0], v[n:, 1] = tilt, rng.uniform(0.5, 1, (n, 3))
+    assert judge(v, np.zeros((2 * n, 3))) > n  # the edge cases need the fallback, and are right
+    edge = np.array([[[0.0, 1.0, 1.057262777555193e-162], [0.0, -2.0, 0.0]]])
+    judge(edge, np.zeros((1, 3)))
 
 
 def test_window():
