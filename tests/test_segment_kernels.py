@@ -152,6 +152,8 @@ def judge(vertices, points):
             assert exact.ulps(cd, ref.distance) < 1.0, (cd, where)
             assert cf == ref.feature, (cf, set(ref.features), where)
             assert cd == 0.0 or ref.sqr_distance != 0, where
+            if math.isfinite(_rounded(ref.sqr_distance)):
+                assert exact.ulps(cs, ref.sqr_distance) <= 1.0, (cs, where)
             checks.check_segment(v, p, cd, (cx, cy, cz)[:dim], Feature(int(cf)), ct)
         else:
             fallbacks += 1
