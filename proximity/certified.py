@@ -24,7 +24,9 @@ on the shape.  It is a filtered computation:
    exactly with error-free products.
 
 Where a sign is undecided (a point within rounding of a region boundary, a
-degenerate triangle, a point on the shape) or the rounding check fails, the
+degenerate triangle, a point on the shape), a term is too small for the
+double-double bounds (below :data:`DD_MIN` in the scaled frame: a distance
+under about ``2^-480`` of the query's size), or the rounding check fails, the
 query falls back to exact rational arithmetic (:mod:`._exact`), refining a
 square root's precision until the rounding is decided.  The fallback counts
 are available from :func:`stats`.
