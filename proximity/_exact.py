@@ -7,7 +7,8 @@ so its speed matters little.  Every float is taken at its exact binary value
 
 Triangles run the seed's region algorithm (Listings 1-8) exactly, which is
 correct in rational arithmetic for every non-degenerate triangle; a
-zero-area triangle is the segment hull of its edges.  Square roots are taken
+zero-area triangle is the segment hull of its edges.  Segments are the
+clamped projection, exact.  Square roots are taken
 with integer square roots: to a precision fixed in advance where the value is
 rational, and with refinement until the rounding is decided where it is not
 (a circle's rim).
@@ -24,9 +25,10 @@ _MAX = Fraction(float.fromhex("0x1.fffffffffffffp+1023"))
 
 def _float(x):
     """The float nearest a Fraction (correctly rounded), inf beyond the range."""
-    if abs(x) > _MAX:
+    try:
+        return float(x)  # correctly rounded, up to the largest float's half ulp above it
+    except OverflowError:
         return math.inf if x > 0 else -math.inf
-    return float(x)
 
 
 def _sqrt_bounds(x, bits):
@@ -69,6 +71,15 @@ def _dot(a, b):
 
 def _sub(a, b):
     return [x - y for x, y in zip(a, b, strict=True)]
+
+
+def _project(p, a, b):
+    """``(t, x)``: the closest point ``x = a + t (b - a)`` to ``p`` on the
+    closed segment ``ab``; ``t = 0`` for a zero-length segment."""
+    e = _sub(b, a)
+    ee = _dot(e, e)
+    t = min(max(_dot(_sub(p, a), e) / ee, Fraction(0)), Fraction(1)) if ee else Fraction(0)
+    return t, [a[k] + t * e[k] for k in range(len(a))]
 
 
 def _on_open_segment(x, a, b):
@@ -140,10 +151,7 @@ def triangle(vertices, point):
         # Zero area: the triangle is the hull of its edges, a segment or a point.
         best = None
         for i, j in ((0, 1), (1, 2), (2, 0)):
-            edge = _sub(v[j], v[i])
-            ee = _dot(edge, edge)
-            u = min(max(_dot(_sub(p, v[i]), edge) / ee, Fraction(0)), Fraction(1)) if ee else Fraction(0)
-            x = [v[i][k] + u * edge[k] for k in range(3)]
+            _, x = _project(p, v[i], v[j])
             dist2 = _dot(_sub(x, p), _sub(x, p))
             if best is None or dist2 < best[0]:
                 best = (dist2, x)
@@ -173,6 +181,23 @@ def triangle(vertices, point):
         int(feature),
         *(_float(w) for w in bary),
     )
+
+
+def segment(vertices, point):
+    """Exact point-segment query for 3D float inputs (``vertices`` ``(2, 3)``).
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, t)`` with the
+    distance faithfully rounded, the rest correctly rounded, and the feature
+    ``VERTEX0`` (``t = 0``, which a zero-length segment always gives: the
+    lowest code of the tied endpoints), ``VERTEX1`` (``t = 1``) or
+    ``EDGE01``.
+    """
+    v0, v1 = ([Fraction(float(c)) for c in row] for row in vertices)
+    p = [Fraction(float(c)) for c in point]
+    t, closest = _project(p, v0, v1)
+    sqr = _dot(_sub(closest, p), _sub(closest, p))
+    feature = Feature.VERTEX0 if t == 0 else (Feature.VERTEX1 if t == 1 else Feature.EDGE01)
+    return faithful_sqrt(sqr), _float(sqr), *(_float(x) for x in closest), int(feature), _float(t)
 
 
 def round_shape(is_disk, center, normal, radius, point, robust_point):

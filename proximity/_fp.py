@@ -20,6 +20,7 @@ EPS = 2.0**-52
 # to four differences can overflow or lose relevant bits to underflow.
 SAFE_MIN = 2.0**-64
 SAFE_MAX = 2.0**64
+TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
 
 
 @intrinsic

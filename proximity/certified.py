@@ -24,7 +24,9 @@ on the shape.  It is a filtered computation:
    exactly with error-free products.
 
 Where a sign is undecided (a point within rounding of a region boundary, a
-degenerate triangle, a point on the shape) or the rounding check fails, the
+degenerate triangle, a point on the shape), a term is too small for the
+double-double bounds (below :data:`DD_MIN` in the scaled frame: a distance
+under about ``2^-480`` of the query's size), or the rounding check fails, the
 query falls back to exact rational arithmetic (:mod:`._exact`), refining a
 square root's precision until the rounding is decided.  The fallback counts
 are available from :func:`stats`.
@@ -67,12 +69,28 @@ PRED4 = 40.0 * U
 CERTAIN = 0.0
 EXACT = 1.0
 
+# Below this, a double-double's low part is subnormal and the relative error
+# bounds of the double-double operations fail (2^-969 and under, with room
+# for the few operations that follow).
+DD_MIN = 2.0**-960
+
 
 @inline
 def _sign(value, bound):
     """+1 or -1 when ``|value| > bound``, else 0 (undecided)."""
     bound = bound * (1.0 + 1e-12) + SLACK
     return 1 if value > bound else (-1 if value < -bound else 0)
+
+
+@inline
+def dot_sign(ax, ay, az, bx, by, bz):
+    """The sign of ``a . b`` for vectors rounded once from exact values, or 0
+    when it is undecided: the predicates of :func:`_classify` on their own.
+
+    The bound covers that rounding and the evaluation, relative to ``|a| . |b|``.
+    """
+    value = ax * bx + ay * by + az * bz
+    return _sign(value, PRED2 * (abs(ax) * abs(bx) + abs(ay) * abs(by) + abs(az) * abs(bz)))
 
 
 @inline
@@ -148,10 +166,15 @@ def norm2_bounded(xh, xl, yh, yl, zh, zl, ex, ey, ez):
 
 @inline
 def ratio(nh, nl, dn, mh, ml, dm):
-    """``n / m`` and its error bound, from the bounds of both."""
+    """``n / m`` and its error bound, from the bounds of both.
+
+    No bound (inf) where ``n`` or ``m`` is below :data:`DD_MIN`: their
+    relative bounds do not hold there, and the quotient may have
+    underflowed to a zero that would pass for an exact one.
+    """
     qh, ql = dd.div(nh, nl, mh, ml)
     rel = dn / abs(nh) + dm / abs(mh) + 32.0 * U * U
-    return qh, ql, 2.0 * rel * abs(qh) if nh != 0.0 else math.inf
+    return qh, ql, 2.0 * rel * abs(qh) if (abs(nh) >= DD_MIN) & (abs(mh) >= DD_MIN) else math.inf
 
 
 @inline
@@ -217,7 +240,7 @@ def scale_exact(x, f1, f2):
 
 
 @inline
-def _dd_vec(x0, y0, z0, x1, y1, z1):
+def dd_vec(x0, y0, z0, x1, y1, z1):
     """``(x1, y1, z1) - (x0, y0, z0)``, exactly, as three double-doubles."""
     xh, xl = dd.diff(x1, x0)
     yh, yl = dd.diff(y1, y0)
@@ -263,6 +286,41 @@ def _sel(c, x, y):
 
 
 @inline
+def vertex_distance(x):
+    """``(ok, distance, sqr_distance)`` of a vertex ``X`` relative to ``P``
+    (a double-double vector): ``|X|^2``, which has no cancellation, and
+    whether its square root is faithful (:func:`faithful_sqrt`)."""
+    vh, vl, dv = sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
+    return faithful_sqrt(vh, vl, dv)
+
+
+@inline
+def edge_distance(p, e):
+    """The distance to a segment from ``X`` along ``E`` (double-double
+    vectors, ``X`` relative to ``P``), known to be closest in its interior:
+    ``|X x E|^2 / |E|^2``.
+
+    Returns ``(ok, distance, sqr_distance, x, y, z, t)``: :func:`vertex_distance`'s
+    three, then the closest point relative to ``P`` and its parameter along
+    ``E``, clamped to ``[0, 1]`` and formed from the nearer end, in float.
+    """
+    k = cross3(p[0], p[1], p[2], p[3], p[4], p[5], e[0], e[1], e[2], e[3], e[4], e[5])
+    nh, nl, dn = norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
+    mh, ml, dm = sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
+    eh, el, de = ratio(nh, nl, dn, mh, ml, dm)
+    ok, r, s = faithful_sqrt(eh, el, de)
+    t = -(p[0] * e[0] + p[2] * e[2] + p[4] * e[4]) / max(e[0] * e[0] + e[2] * e[2] + e[4] * e[4], 5e-324)
+    t = min(max(t, 0.0), 1.0)
+    near_end = t > 0.5
+    u = t - 1.0 if near_end else t
+    base = 1.0 if near_end else 0.0
+    ex = p[0] + base * e[0] + u * e[0]
+    ey = p[2] + base * e[2] + u * e[2]
+    ez = p[4] + base * e[4] + u * e[4]
+    return ok, r, s, ex, ey, ez, t
+
+
+@inline
 def _vertex(a, b, c, feature):
     """The squared distance to the closest vertex, ``|X|^2``.
 
@@ -271,8 +329,7 @@ def _vertex(a, b, c, feature):
     with ``(x, y, z)`` relative to ``P``.
     """
     x = _sel(feature == VERTEX0, a, _sel(feature == VERTEX1, b, c))
-    vh, vl, dv = sum_sq(x[0], x[1], x[2], x[3], x[4], x[5])
-    ok, r, s = faithful_sqrt(vh, vl, dv)
+    ok, r, s = vertex_distance(x)
     b0 = 1.0 if feature == VERTEX0 else 0.0
     b1 = 1.0 if feature == VERTEX1 else 0.0
     b2 = 1.0 if feature == VERTEX2 else 0.0
@@ -289,19 +346,7 @@ def _edge(a, b, c, e0, e1, e2, feature):
     on12 = feature == EDGE12
     p = _sel(on01, a, _sel(on12, b, c))
     e = _sel(on01, e0, _sel(on12, e2, (-e1[0], -e1[1], -e1[2], -e1[3], -e1[4], -e1[5])))
-    k = cross3(p[0], p[1], p[2], p[3], p[4], p[5], e[0], e[1], e[2], e[3], e[4], e[5])
-    nh, nl, dn = norm2_bounded(k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8])
-    mh, ml, dm = sum_sq(e[0], e[1], e[2], e[3], e[4], e[5])
-    eh, el, de = ratio(nh, nl, dn, mh, ml, dm)
-    ok, r, s = faithful_sqrt(eh, el, de)
-    t = -(p[0] * e[0] + p[2] * e[2] + p[4] * e[4]) / max(e[0] * e[0] + e[2] * e[2] + e[4] * e[4], 5e-324)
-    t = min(max(t, 0.0), 1.0)
-    near_end = t > 0.5
-    u = t - 1.0 if near_end else t
-    base = 1.0 if near_end else 0.0
-    ex = p[0] + base * e[0] + u * e[0]
-    ey = p[2] + base * e[2] + u * e[2]
-    ez = p[4] + base * e[4] + u * e[4]
+    ok, r, s, ex, ey, ez, t = edge_distance(p, e)
     b0 = 1.0 - t if on01 else (0.0 if on12 else t)
     b1 = t if on01 else (1.0 - t if on12 else 0.0)
     b2 = 0.0 if on01 else (t if on12 else 1.0 - t)
@@ -350,12 +395,12 @@ def _kind(feature):
 def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Exact differences for :func:`_vertex`, :func:`_edge` and :func:`_face`, the largest ``|V - P|``,
     and whether all of them are in the safe window (and finite)."""
-    a = _dd_vec(px, py, pz, v0x, v0y, v0z)
-    b = _dd_vec(px, py, pz, v1x, v1y, v1z)
-    c = _dd_vec(px, py, pz, v2x, v2y, v2z)
-    e0 = _dd_vec(v0x, v0y, v0z, v1x, v1y, v1z)
-    e1 = _dd_vec(v0x, v0y, v0z, v2x, v2y, v2z)
-    e2 = _dd_vec(v1x, v1y, v1z, v2x, v2y, v2z)
+    a = dd_vec(px, py, pz, v0x, v0y, v0z)
+    b = dd_vec(px, py, pz, v1x, v1y, v1z)
+    c = dd_vec(px, py, pz, v2x, v2y, v2z)
+    e0 = dd_vec(v0x, v0y, v0z, v1x, v1y, v1z)
+    e1 = dd_vec(v0x, v0y, v0z, v2x, v2y, v2z)
+    e2 = dd_vec(v1x, v1y, v1z, v2x, v2y, v2z)
     m = max(
         max(max(abs(a[0]), abs(a[2])), max(abs(a[4]), abs(b[0]))),
         max(max(abs(b[2]), abs(b[4])), max(max(abs(c[0]), abs(c[2])), abs(c[4]))),
@@ -367,17 +412,26 @@ def differences(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
 
 
 @inline
+def settle(ok, d, s, g):
+    """``(status, distance, sqr_distance)``: ``d`` and ``s`` unscaled by ``g``,
+    and :data:`EXACT` where ``d`` was not faithful or became subnormal or
+    infinite (its rounding is then no longer the one that was checked)."""
+    d = d * g
+    ok = ok & ((d >= 2.2250738585072014e-308) | (d == 0.0)) & (d < np.inf)
+    return CERTAIN if ok else EXACT, d, s * g * g
+
+
+@inline
 def finish(r, g, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Unscale by ``g``, make the point absolute (vertices exactly), and
     refuse a distance that became subnormal or infinite."""
     ok, d, s, x, y, z, feature, b0, b1, b2 = r
-    d = d * g
+    status, d, s = settle(ok, d, s, g)
     x, y, z = px + x * g, py + y * g, pz + z * g
     x = v0x if feature == VERTEX0 else (v1x if feature == VERTEX1 else (v2x if feature == VERTEX2 else x))
     y = v0y if feature == VERTEX0 else (v1y if feature == VERTEX1 else (v2y if feature == VERTEX2 else y))
     z = v0z if feature == VERTEX0 else (v1z if feature == VERTEX1 else (v2z if feature == VERTEX2 else z))
-    ok = ok & ((d >= 2.2250738585072014e-308) | (d == 0.0)) & (d < np.inf)
-    return CERTAIN if ok else EXACT, d, s * g * g, x, y, z, feature, b0, b1, b2
+    return status, d, s, x, y, z, feature, b0, b1, b2
 
 
 # The certified block keeps each query's classified feature in the first of

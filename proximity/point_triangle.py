@@ -38,7 +38,8 @@ Two methods:
       decision therefore costs at most that much.  The face distance is then
       ``|n . a| / |n|``, with ``n . a`` as a compensated dot product.
     * Otherwise the minimum is over the three edges, each a clamped
-      projection that never divides by zero: a degenerate triangle (collinear,
+      projection that never divides by zero (the segment's,
+      :func:`.point_segment.project`): a degenerate triangle (collinear,
       or with coincident vertices) is handled as the segments or the point
       it is, with no special case.
 
@@ -64,6 +65,7 @@ from ._fp import (
     EPS,
     SAFE_MAX,
     SAFE_MIN,
+    TINY,
     UNSCALED,
     cross_accurate,
     dot3_accurate,
@@ -90,8 +92,7 @@ from ._loops import (
 )
 from .features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 from .methods import CERTIFIED
-
-TINY = 5e-324  # the smallest subnormal: a divisor that is never zero
+from .point_segment import project
 
 # The feature codes as floats, for the SIMD loops, which keep them in float rows.
 F_NONE, F_FACE = float(NONE), float(FACE)
@@ -350,28 +351,6 @@ def _boundary_feature(s, t):
 
 
 @inline
-def _segment(ax, ay, az, ex, ey, ez, bx, by, bz):
-    """Closest point to the origin on the segment from ``a`` to ``b = a + e``.
-
-    Returns ``(sqr_distance, x, y, z, t)``.  The parameter is clamped after a
-    division that cannot produce NaN (a zero-length segment has a zero
-    numerator), so a degenerate segment is its point.  The closest point is
-    formed from the nearer endpoint, which halves its rounding and makes the
-    endpoints exact.  Written with selects rather than branches: which case
-    applies is unpredictable from one query to the next.
-    """
-    numer = -(ax * ex + ay * ey + az * ez)
-    denom = ex * ex + ey * ey + ez * ez
-    t = min(max(numer / max(denom, TINY), 0.0), 1.0)
-    near_b = t > 0.5
-    u = t - 1.0 if near_b else t
-    x = (bx if near_b else ax) + u * ex
-    y = (by if near_b else ay) + u * ey
-    z = (bz if near_b else az) + u * ez
-    return x * x + y * y + z * z, x, y, z, t
-
-
-@inline
 def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     """The robust minimisation on vertices relative to ``P``, in the safe window.
 
@@ -399,9 +378,9 @@ def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     w = max(wa + wb + wc, TINY)
 
     # Edges V0V1, V1V2, V2V0; ties go to the earlier edge.
-    d1, x1, y1, z1, t1 = _segment(ax, ay, az, e0x, e0y, e0z, bx, by, bz)
-    d2, x2, y2, z2, t2 = _segment(bx, by, bz, e2x, e2y, e2z, cx, cy, cz)
-    d3, x3, y3, z3, t3 = _segment(cx, cy, cz, -e1x, -e1y, -e1z, ax, ay, az)
+    d1, x1, y1, z1, t1 = project(ax, ay, az, e0x, e0y, e0z, bx, by, bz)
+    d2, x2, y2, z2, t2 = project(bx, by, bz, e2x, e2y, e2z, cx, cy, cz)
+    d3, x3, y3, z3, t3 = project(cx, cy, cz, -e1x, -e1y, -e1z, ax, ay, az)
     on2 = d2 < d1
     best = d2 if on2 else d1
     on3 = d3 < best

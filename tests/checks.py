@@ -1,8 +1,9 @@
 """Assertions of the accuracy contract, judged by the exact reference.
 
 ``robust`` promises ``|d - d*| <= 8 eps S`` for every finite input, with
-``S = max_i |P - V_i|`` for a triangle and ``S = |P - C| + R`` for a circle
-or a disk.  The closest point is a float vector, so checks on it (that it lies
+``S = max_i |P - V_i|`` for a triangle or a segment and ``S = |P - C| + R``
+for a circle or a disk (plus ``2^-1075``, the rounding of a subnormal
+distance, where a check says so).  The closest point is a float vector, so checks on it (that it lies
 on the shape, that ``|P - point| == d``) also allow for the rounding of its
 own coordinates: ``eps * |point|``.
 """
@@ -69,6 +70,51 @@ def check_triangle(vertices, point, result, bound=BOUND):
     b = np.asarray(result.barycentric)
     assert (b >= 0).all(), f"negative barycentric {b} for {context}"
     assert abs(b.sum() - 1.0) <= 1e-15, f"barycentric {b} does not sum to 1 for {context}"
+    return error
+
+
+HALF_SUBNORMAL = mpmath.mpf(2) ** -1075
+"""The rounding of a subnormal distance: the absolute term of the robust bound."""
+
+
+def check_segment(vertices, point, distance, closest, feature, t, bound=BOUND):
+    """Assert the robust contract for one segment query; return the error in eps*S.
+
+    ``vertices`` is ``(2, D)``, ``point`` and ``closest`` ``(D,)``.  Checks
+    ``|d - d*| <= bound eps S + 2^-1075``; that ``closest`` lies on the
+    segment, at distance ``d`` from ``P`` and at ``V0 + t (V1 - V0)``, each
+    within that and the rounding of its own coordinates; ``0 <= t <= 1``;
+    that ``VERTEX0`` and ``VERTEX1`` come with ``t`` 0 and 1 and the endpoint
+    itself; and that the feature holds a point within the bound of the
+    minimum (a vertex's own distance).
+    """
+    v = np.asarray(vertices, dtype=float)
+    ref = exact.segment_closest(v, point)
+    scale = exact.segment_scale(v, point)
+    where = f"vertices={v.tolist()!r}, point={np.asarray(point).tolist()!r}"
+    error = exact.error_in_units(float(distance), ref.distance, scale)
+    with mpmath.workprec(exact.PREC):
+        allowed = exact.to_mpf(exact.EPS) * bound * scale + HALF_SUBNORMAL
+        _within(abs(_mpf(distance) - ref.distance), allowed, f"distance error ({error:.3g} eps*S), {where}")
+        # The point's own rounding, subnormal coordinates included.
+        on_segment = allowed + point_slack(closest) + HALF_SUBNORMAL * mpmath.sqrt(len(closest))
+        _within(exact.segment_distance(v, closest), on_segment, f"closest point off the segment, {where}")
+        _within(abs(exact_norm(point, closest) - _mpf(distance)), on_segment, f"d != |P - point|, {where}")
+        # The point V0 + t (V1 - V0), exactly, and its distance from ``closest``.
+        tt = Fraction(float(t))
+        along = [Fraction(float(a)) + tt * (Fraction(float(b)) - Fraction(float(a))) for a, b in v.T]
+        gap = sum((x - Fraction(float(c))) ** 2 for x, c in zip(along, closest, strict=True))
+        _within(mpmath.sqrt(exact.to_mpf(gap)), on_segment, f"point != V0 + t (V1 - V0), t={t!r}, {where}")
+        if int(feature) != exact.Feature.EDGE01:
+            vertex = exact_norm(point, v[int(feature)])
+            _within(vertex - ref.distance, allowed, f"feature {feature!r} ({set(ref.features)}), {where}")
+    assert 0.0 <= t <= 1.0, f"t={t!r} outside [0, 1], {where}"
+    ends = {exact.Feature.VERTEX0: (0.0, v[0]), exact.Feature.VERTEX1: (1.0, v[1])}
+    if int(feature) in ends:
+        end_t, end = ends[int(feature)]
+        assert t == end_t and list(closest) == list(end), f"{feature!r}: t={t!r}, at {list(closest)}, {where}"
+    else:
+        assert feature == exact.Feature.EDGE01, f"feature {feature!r}, {where}"
     return error
 
 

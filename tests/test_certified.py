@@ -139,3 +139,24 @@ def test_distances_beyond_the_float_range_do_not_raise():
         shape = cls([1e300, 1e300, 1e300], [1.0, 1.0, 1.0], 1e300)
         r = shape.closest_point([[-huge, -huge, -huge], [1e308, -1e308, 0.0]], method="certified")
         assert np.isinf(r.distance[0]) and np.isfinite(r.distance[1])
+
+
+def test_distances_far_below_the_query_size():
+    """Squared distances under 2^-960 of the query's size squared: the
+    double-double error bounds fail there (their low parts are subnormal),
+    and a quotient can underflow to a false exact zero, so the filter must
+    leave them to the exact fallback.  A sliver's face 1e-30 to 1e-10 above
+    it, 1e-150 to 1e-130 thin, and an edge 7e-163 from the point."""
+    rng = np.random.default_rng(21)
+    n = 300
+    v = np.zeros((n, 3, 3))
+    v[:, 1, 0] = 1.0
+    v[:, 2, 0], v[:, 2, 1] = 0.5, 10.0 ** rng.uniform(-150, -130, n)
+    p = np.empty((n, 3))
+    p[:, 0], p[:, 1] = rng.uniform(0.3, 0.7, n), v[:, 2, 1] * rng.uniform(0.2, 0.4, n)
+    p[:, 2] = 10.0 ** rng.uniform(-30, -10, n)
+    r = Triangle(v).closest_point(p, method="certified")
+    for k in range(n):
+        check_triangle(v[k], p[k], r[k])
+    edge, point = [[0.0, 1.0, 1.057262777555193e-162], [0.0, -2.0, 0.0], [0.0, 0.0, 5.0]], [0.0, 0.0, -1e-170]
+    check_triangle(edge, point, Triangle(edge).closest_point(point, method="certified"))

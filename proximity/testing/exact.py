@@ -38,6 +38,7 @@ __all__ = [
     "PREC",
     "Feature",
     "RoundClosest",
+    "SegmentClosest",
     "TriangleClosest",
     "circle_closest",
     "circle_distance",
@@ -48,6 +49,10 @@ __all__ = [
     "disk_sqr_distance",
     "error_in_units",
     "pairwise",
+    "segment_closest",
+    "segment_distance",
+    "segment_scale",
+    "segment_sqr_distance",
     "to_mpf",
     "triangle_closest",
     "triangle_distance",
@@ -129,6 +134,41 @@ class TriangleClosest:
     features: frozenset[Feature]
     barycentric: tuple[Fraction, Fraction, Fraction]
     feature_sqr_distances: tuple[Fraction, ...]
+
+    @property
+    def distance(self) -> mpmath.mpf:
+        """Distance, correctly rounded to `PREC` bits."""
+        return _sqrt(self.sqr_distance)
+
+
+@dataclass(frozen=True)
+class SegmentClosest:
+    """Exact closest point of a segment to a point.
+
+    Attributes
+    ----------
+    sqr_distance : Fraction
+        Exact squared distance.
+    point : tuple of Fraction
+        Exact closest point, one coordinate per dimension.
+    feature : Feature
+        ``VERTEX0``, ``VERTEX1`` or ``EDGE01``: the feature whose relative
+        interior holds the closest point. A zero-length segment's point is
+        both vertices; the lower code, ``VERTEX0``, is reported.
+    features : frozenset of Feature
+        Every feature attaining the minimum, `feature` included. It has two
+        elements only for a zero-length segment.
+    t : Fraction
+        Exact parameter of `point` along the segment: ``point = V0 + t (V1 -
+        V0)`` with ``0 <= t <= 1``; 0 on ``VERTEX0`` (a zero-length segment
+        included) and 1 on ``VERTEX1``.
+    """
+
+    sqr_distance: Fraction
+    point: Vector
+    feature: Feature
+    features: frozenset[Feature]
+    t: Fraction
 
     @property
     def distance(self) -> mpmath.mpf:
@@ -440,9 +480,148 @@ def triangle_scale(vertices: Any, point: Any) -> mpmath.mpf:
     >>> float(triangle_scale([[0, 0], [4, 0], [0, 4]], [0, -3]))
     7.0
     """
-    v = _rationals(vertices, "vertices", (3, None))
-    p = _vector(point, "point", v.shape[1])
-    return _sqrt(max(_dot(_sub(row, p), _sub(row, p)) for row in v))
+    return _farthest(_rationals(vertices, "vertices", (3, None)), point)
+
+
+def _farthest(vertices: np.ndarray, point: Any) -> mpmath.mpf:
+    """Largest Euclidean distance from `point` to a row of `vertices` (exact), at `PREC` bits."""
+    p = _vector(point, "point", vertices.shape[1])
+    return _sqrt(max(_dot(_sub(row, p), _sub(row, p)) for row in vertices))
+
+
+# -- segment -----------------------------------------------------------------
+
+
+def segment_closest(vertices: Any, point: Any) -> SegmentClosest:
+    """Exact closest point of a closed segment to a point.
+
+    As `triangle_closest`, the minimum over the features, each searched in its
+    relative interior: the 2 endpoints and the open segment (the projection
+    parameter strictly between 0 and 1). A zero-length segment contributes
+    no open segment, and its two endpoints tie.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (2, D)
+        Segment endpoints ``V0, V1``, D >= 1, finite float64.
+    point : array_like, shape (D,)
+        Query point, finite float64.
+
+    Returns
+    -------
+    SegmentClosest
+
+    Raises
+    ------
+    ValueError
+        If a shape is wrong or a coordinate is not finite.
+
+    Examples
+    --------
+    >>> r = segment_closest([[0, 0, 0], [4, 0, 0]], [1, 2, 2])
+    >>> r.sqr_distance, r.feature.name, r.t, r.point
+    (Fraction(8, 1), 'EDGE01', Fraction(1, 4), (Fraction(1, 1), Fraction(0, 1), Fraction(0, 1)))
+    >>> segment_closest([[1, 1], [1, 1]], [4, 5]).features == {Feature.VERTEX0, Feature.VERTEX1}
+    True
+    """
+    v = _rationals(vertices, "vertices", (2, None))
+    (v, p), exponent = _dyadic(v, _rationals(point, "point", (v.shape[1],)))
+    # Integer coordinates relative to the point, as in `triangle_closest`.
+    a, b = (tuple(x - y for x, y in zip(row, p, strict=True)) for row in v)
+    edge = _isub(b, a)
+    length2 = _idot(edge, edge)
+    along = -_idot(a, edge)  # t = along / length2
+
+    # A candidate X = a + (num / den) * edge, as (feature, num, den).
+    candidates = [(Feature.VERTEX0, 0, 1), (Feature.VERTEX1, 1, 1)]
+    if 0 < along < length2:
+        candidates.append((Feature.EDGE01, along, length2))
+    scored = []
+    for feature, num, den in candidates:
+        offset = [den * ak + num * ek for ak, ek in zip(a, edge, strict=True)]
+        scored.append((Fraction(_idot(offset, offset), den * den), feature, offset, num, den))
+    sqr, feature, offset, num, den = min(scored, key=lambda item: item[:2])
+    unit = _power_of_two(exponent)
+    return SegmentClosest(
+        sqr_distance=sqr * unit * unit,
+        point=tuple((pk + Fraction(ok, den)) * unit for pk, ok in zip(p, offset, strict=True)),
+        feature=feature,
+        features=frozenset(item[1] for item in scored if item[0] == sqr),
+        t=Fraction(num, den),
+    )
+
+
+def segment_sqr_distance(vertices: Any, point: Any) -> Fraction:
+    """Exact squared distance from a point to a closed segment.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (2, D)
+        Segment endpoints, finite float64.
+    point : array_like, shape (D,)
+        Query point, finite float64.
+
+    Returns
+    -------
+    Fraction
+
+    See Also
+    --------
+    segment_closest : the same query with the closest point and feature.
+
+    Examples
+    --------
+    >>> segment_sqr_distance([[0, 0], [4, 0]], [6, 1])
+    Fraction(5, 1)
+    """
+    return segment_closest(vertices, point).sqr_distance
+
+
+def segment_distance(vertices: Any, point: Any) -> mpmath.mpf:
+    """Distance from a point to a closed segment, correctly rounded to `PREC` bits.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (2, D)
+        Segment endpoints, finite float64.
+    point : array_like, shape (D,)
+        Query point, finite float64.
+
+    Returns
+    -------
+    mpmath.mpf
+
+    Examples
+    --------
+    >>> float(segment_distance([[0, 0], [4, 0]], [-3, -4]))
+    5.0
+    """
+    return _sqrt(segment_sqr_distance(vertices, point))
+
+
+def segment_scale(vertices: Any, point: Any) -> mpmath.mpf:
+    """Largest Euclidean distance from the point to an endpoint, at `PREC` bits.
+
+    The error scale ``S = max(|P - V0|, |P - V1|)`` of a segment query, as
+    `triangle_scale` is a triangle's.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (2, D)
+        Segment endpoints, finite float64.
+    point : array_like, shape (D,)
+        Query point, finite float64.
+
+    Returns
+    -------
+    mpmath.mpf
+
+    Examples
+    --------
+    >>> float(segment_scale([[0, 0], [4, 0]], [0, -3]))
+    5.0
+    """
+    return _farthest(_rationals(vertices, "vertices", (2, None)), point)
 
 
 # -- circle and disk ---------------------------------------------------------
