@@ -51,10 +51,11 @@ from .results import (  # noqa: E402
     MeshResult,
     Result,
     SceneResult,
+    SegmentResult,
     TriangleResult,
 )
 from .scene import Scene  # noqa: E402
-from .shapes import DEFAULT_METHOD, Circle, Disk, Shape, Triangle  # noqa: E402
+from .shapes import DEFAULT_METHOD, Circle, Disk, Segment, Shape, Triangle  # noqa: E402
 
 __all__ = [
     "Circle",
@@ -66,6 +67,8 @@ __all__ = [
     "Result",
     "Scene",
     "SceneResult",
+    "Segment",
+    "SegmentResult",
     "Shape",
     "Triangle",
     "TriangleMesh",
@@ -80,7 +83,7 @@ __all__ = [
 __version__ = "0.1.0"
 
 
-_SHAPES = (Triangle, Circle, Disk, TriangleMesh, Scene)
+_SHAPES = (Triangle, Segment, Circle, Disk, TriangleMesh, Scene)
 _SHAPE_TYPES = frozenset(_SHAPES)
 
 

@@ -131,6 +131,29 @@ def _seed_region(d, a, b, c, e):
     return s, one - s
 
 
+def _triangle_closest(v, p):
+    """``(closest, s, t)``: the exact closest point of the triangle ``v`` to
+    ``p`` (Fractions) and, for a triangle of non-zero area, its parameters."""
+    e0, e1 = _sub(v[1], v[0]), _sub(v[2], v[0])
+    a, b, c = _dot(e0, e0), _dot(e0, e1), _dot(e1, e1)
+    dvec = _sub(v[0], p)
+    d, e = _dot(e0, dvec), _dot(e1, dvec)
+    if a * c - b * b > 0:
+        s, t = _seed_region(d, a, b, c, e)
+        closest = [v[0][i] + s * e0[i] + t * e1[i] for i in range(3)]
+        return closest, s, t
+    else:
+        # Zero area: the triangle is the hull of its edges, a segment or a point.
+        best = None
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            _, x = _project(p, v[i], v[j])
+            dist2 = _dot(_sub(x, p), _sub(x, p))
+            if best is None or dist2 < best[0]:
+                best = (dist2, x)
+        closest, s, t = best[1], None, None
+    return closest, s, t
+
+
 def triangle(vertices, point):
     """Exact point-triangle query for 3D float inputs.
 
@@ -140,22 +163,7 @@ def triangle(vertices, point):
     """
     v = [[Fraction(float(c)) for c in row] for row in vertices]
     p = [Fraction(float(c)) for c in point]
-    e0, e1 = _sub(v[1], v[0]), _sub(v[2], v[0])
-    a, b, c = _dot(e0, e0), _dot(e0, e1), _dot(e1, e1)
-    dvec = _sub(v[0], p)
-    d, e = _dot(e0, dvec), _dot(e1, dvec)
-    if a * c - b * b > 0:
-        s, t = _seed_region(d, a, b, c, e)
-        closest = [v[0][i] + s * e0[i] + t * e1[i] for i in range(3)]
-    else:
-        # Zero area: the triangle is the hull of its edges, a segment or a point.
-        best = None
-        for i, j in ((0, 1), (1, 2), (2, 0)):
-            _, x = _project(p, v[i], v[j])
-            dist2 = _dot(_sub(x, p), _sub(x, p))
-            if best is None or dist2 < best[0]:
-                best = (dist2, x)
-        closest = best[1]
+    closest, s, t = _triangle_closest(v, p)
     sqr = _dot(_sub(closest, p), _sub(closest, p))
 
     # The feature whose relative interior holds the closest point, lowest code first.
@@ -240,3 +248,70 @@ def round_shape(is_disk, center, normal, radius, point, robust_point):
         x, y, z = robust_point
         feature = Feature.RIM
     return dist, sqr, x, y, z, int(feature), (not is_disk) and q2 == 0, height, radial
+
+
+def hull_sqr_distance(vertices, point):
+    """The exact squared distance from ``point`` to the hull of one, two or
+    three float ``vertices`` (a point, a segment, a triangle), a Fraction."""
+    v = [[Fraction(float(c)) for c in row] for row in vertices]
+    p = [Fraction(float(c)) for c in point]
+    if len(v) == 3:
+        closest = _triangle_closest(v, p)[0]
+    elif len(v) == 2:
+        closest = _project(p, v[0], v[1])[1]
+    else:
+        closest = v[0]
+    return _dot(_sub(closest, p), _sub(closest, p))
+
+
+def round_sqr_bounds(is_disk, center, normal, radius, point, bits):
+    """``(lo2, hi2)``, Fractions bounding the squared distance from ``point`` to
+    a disk or a circle, ``hi2 - lo2`` about ``2^-bits`` of it (equal where it
+    is rational: the disk's face)."""
+    c = [Fraction(float(x)) for x in center]
+    n = [Fraction(float(x)) for x in normal]
+    r = Fraction(float(radius))
+    dvec = _sub([Fraction(float(x)) for x in point], c)
+    nn = _dot(n, n)
+    nd = _dot(n, dvec)
+    h2 = nd * nd / nn
+    q2 = _dot(dvec, dvec) - h2
+    if is_disk and q2 <= r * r:
+        return h2, h2
+    if q2 == r * r:
+        return h2, h2
+    q_lo, q_hi = _sqrt_bounds(q2, bits) if q2 else (Fraction(0), Fraction(0))
+    w = sorted([abs(q_lo - r), abs(q_hi - r)])
+    return h2 + (0 if q_lo <= r <= q_hi else w[0]) ** 2, h2 + w[1] ** 2
+
+
+def _perfect_square(x):
+    """The exact square root of the Fraction ``x`` where it is rational, else None."""
+    n, d = isqrt(x.numerator), isqrt(x.denominator)
+    return Fraction(n, d) if n * n == x.numerator and d * d == x.denominator else None
+
+
+def minus_radius(sqr_bounds, radius):
+    """A float within one ulp of ``sqrt(s) - radius``, ``s`` the exact squared
+    distance bounded by ``sqr_bounds(bits) -> (lo2, hi2)`` to ``2^-bits`` of it.
+
+    The bounds are narrowed until one float is faithful for every value
+    they allow; a rational ``sqrt(s)`` (an exact square) gives the value
+    itself, correctly rounded.
+    """
+    r = Fraction(float(radius))
+    bits = 64
+    while True:
+        lo2, hi2 = sqr_bounds(bits)
+        if lo2 == hi2:
+            root = _perfect_square(lo2)
+            if root is not None:
+                return _float(root - r)
+        lo = _sqrt_bounds(lo2, bits)[0] if lo2 > 0 else Fraction(0)
+        hi = _sqrt_bounds(hi2, bits)[1]
+        t_lo, t_hi = lo - r, hi - r
+        f = _float((t_lo + t_hi) / 2)
+        below, above = math.nextafter(f, -math.inf), math.nextafter(f, math.inf)
+        if Fraction(below) < t_lo and t_hi < Fraction(above) or bits > 1 << 16:
+            return f
+        bits *= 2

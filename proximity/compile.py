@@ -43,6 +43,8 @@ def _jobs(method):
     name = m.name
     jobs = []
     for kinds, module in _kernel_modules():
+        if name not in module.KERNELS:
+            continue
         jobs += [
             (f"{kinds}: {name}, one point", lambda module=module: single_entry(module.single_kernel(m))),
             (f"{kinds}: {name}, pairs",
@@ -50,9 +52,9 @@ def _jobs(method):
             (f"{kinds}: {name}, many points against one shape",
              lambda module=module: _batch.batch_kernel(module.LAYOUT, module.block(m, True))),
         ]  # fmt: skip
-    for p in primitives.BY_CODE:
+    for p in primitives.offering(m):
         jobs.append((f"collection of {p.name}s: {name}", lambda p=p: search_kernel(m, (p,))))
-    jobs.append((f"collection of several kinds: {name}", lambda: search_kernel(m, primitives.BY_CODE)))
+    jobs.append((f"collection of several kinds: {name}", lambda: search_kernel(m, primitives.offering(m))))
     return jobs
 
 

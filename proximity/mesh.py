@@ -16,7 +16,7 @@ from ._collection import Collection
 from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .primitives import TRIANGLE
 from .results import MeshResult, format_repr
-from .shapes import DEFAULT_METHOD, Triangle, keyword_only
+from .shapes import DEFAULT_METHOD, keyword_only
 
 #: How :meth:`TriangleMesh.signed_distance` and :meth:`TriangleMesh.contains`
 #: tell inside from outside.
@@ -67,7 +67,7 @@ class TriangleMesh(Collection):
     """
 
     __slots__ = ("vertices", "faces", "broad_phase", "_tree", "_signs")
-    methods = Triangle.methods
+    methods = TRIANGLE.methods
 
     def __init__(self, vertices, faces=None, *, broad_phase="auto"):
         if faces is None:

@@ -56,12 +56,17 @@ Segments in 2D are embedded in the ``z = 0`` plane, which changes no
 distance.
 """
 
+import functools
 import math
+import sys
 
 import numpy as np
 
-from ._fp import SAFE_MAX, SAFE_MIN, TINY, UNSCALED, pow2_scale, unscale
-from ._jit import inline, part
+from . import _exact
+from ._batch import Layout, run
+from ._fp import EPS, SAFE_MAX, SAFE_MIN, TINY, UNSCALED, pow2_scale, unscale
+from ._jit import inline, part, specialize
+from ._loops import BLOCK, scatter_common
 from .certified import (
     CERTAIN,
     EXACT,
@@ -73,6 +78,7 @@ from .certified import (
     vertex_distance,
 )
 from .features import EDGE01, NONE, VERTEX0, VERTEX1
+from .methods import CERTIFIED
 
 
 @inline
@@ -251,3 +257,219 @@ def certified(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz):
     y = v0y if t == 0.0 else (v1y if t == 1.0 else y)
     z = v0z if t == 0.0 else (v1z if t == 1.0 else z)
     return CERTAIN, d, s, x, y, z, float(code), t
+
+
+# The per-method queries, with the leading status of the certified method.
+
+
+@inline
+def robust_query(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz):
+    """:func:`robust` with the leading status of the per-method queries (always certain)."""
+    d, sqr, x, y, z, f, t = robust(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz)
+    return CERTAIN, d, sqr, x, y, z, float(f), t
+
+
+# Bound per method by :func:`proximity._jit.specialize`: the query of one point.
+QUERY = None
+
+
+def _single(out, v, p):
+    """One query, written to ``out[:9]``: the fast path for one point and one segment.
+
+    ``v`` holds the six endpoint coordinates and ``p`` the point; ``out[6]``
+    is the parameter, ``out[9]`` the status, non-zero where the certified
+    method needs its exact fallback.
+    """
+    px, py, pz = p[0], p[1], p[2]
+    out[7] = math.nan
+    out[8] = math.nan
+    if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+        out[:] = math.nan
+        out[5] = NONE
+        out[9] = 0.0
+    else:
+        out[9], out[0], out[1], out[2], out[3], out[4], out[5], out[6] = QUERY(
+            v[0], v[1], v[2], v[3], v[4], v[5], px, py, pz
+        )
+
+
+def exact_row(row, vertices, point):
+    """Redo a fast-path row with the certified method's exact fallback."""
+    row[:7] = _exact.segment(vertices.reshape(2, 3), point)
+    row[9] = 0.0
+
+
+# A block's scratch rows: the endpoints (six rows) and the point (three),
+# the query's seven results, and whether it was in the safe window.
+_V, _P, _OUT, _OK, _ROWS = 0, 6, 9, 16, 17
+_NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, float(NONE), math.nan)
+
+
+@inline
+def _gather(z, V, P, n_j, k0, nb):
+    """Rows ``_V`` to ``_P + 2`` of ``z``: endpoints and point of queries
+    ``k0 .. k0 + nb`` of an ``(I, J)`` loop, as
+    :func:`proximity._loops.gather_triangles` does for triangles."""
+    i = k0 // n_j
+    j = k0 - i * n_j
+    q = 0
+    while q < nb:
+        run = min(nb - q, n_j - j)
+        Vi = V[i]
+        Pi = P[i]
+        for t in range(run):
+            for c in range(3):
+                z[_V + c, q + t] = Vi[j + t, 0, c]
+                z[_V + 3 + c, q + t] = Vi[j + t, 1, c]
+                z[_P + c, q + t] = Pi[j + t, c]
+        q += run
+        i += 1
+        j = 0
+    for row in range(_V, _P + 3):
+        for q in range(nb, BLOCK):
+            z[row, q] = 0.0
+
+
+@inline
+def _at(z, q):
+    """Query ``q`` of a block: ``(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz)``."""
+    return (
+        z[_V, q], z[_V + 1, q], z[_V + 2, q], z[_V + 3, q], z[_V + 4, q], z[_V + 5, q],
+        z[_P, q], z[_P + 1, q], z[_P + 2, q],
+    )  # fmt: skip
+
+
+@inline
+def _store(z, q, res):
+    """Column ``q`` of the rows ``_OUT``: one query's seven results."""
+    z[_OUT, q], z[_OUT + 1, q], z[_OUT + 2, q], z[_OUT + 3, q] = res[0], res[1], res[2], res[3]
+    z[_OUT + 4, q], z[_OUT + 5, q], z[_OUT + 6, q] = res[4], res[5], res[6]
+
+
+@inline
+def _scatter(z, k0, nb, out, full):
+    """:func:`proximity._loops.scatter_common`, and the parameters (``out[4]``)."""
+    scatter_common(z, _OUT, k0, nb, out, full)
+    if full:
+        t = out[4][k0 : k0 + nb]
+        for q in range(nb):
+            t[q] = z[_OUT + 6, q]
+
+
+@part
+def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
+    """Robust queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`):
+    a loop that compiles to SIMD code for the queries in the safe window,
+    the scalar path for the others."""
+    z = np.empty((_ROWS, BLOCK))
+    _gather(z, shape.vertices, P, n_j, k0, nb)
+    for q in range(BLOCK):
+        v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz = _at(z, q)
+        ax, ay, az = v0x - px, v0y - py, v0z - pz
+        bx, by, bz = v1x - px, v1y - py, v1z - pz
+        _, ok = window(ax, ay, az, bx, by, bz)
+        res = finish(robust_local(ax, ay, az, bx, by, bz), UNSCALED, v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz)
+        _store(z, q, res)
+        z[_OK, q] = ok
+    for q in range(nb):
+        if z[_OK, q] != 0.0:
+            continue
+        v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz = _at(z, q)
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            _store(z, q, robust(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz))
+        else:
+            _store(z, q, _NAN_ROW)
+    _scatter(z, k0, nb, out, full)
+
+
+@part
+def _certified_block(shape, P, n_j, k0, nb, out, exact, full):
+    """Certified queries ``k0 .. k0 + nb`` of a batch, one by one; ``exact``
+    flags the rows left to the exact fallback."""
+    z = np.empty((_ROWS, BLOCK))
+    _gather(z, shape.vertices, P, n_j, k0, nb)
+    for q in range(nb):
+        v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz = _at(z, q)
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            res = certified(v0x, v0y, v0z, v1x, v1y, v1z, px, py, pz)
+            exact[k0 + q] = res[0] != CERTAIN
+            _store(z, q, res[1:])
+        else:
+            _store(z, q, _NAN_ROW)
+    _scatter(z, k0, nb, out, full)
+
+
+# Per method: the query of one point, and the block functions of the batch
+# loop for pairs and for many points against one segment.
+KERNELS = {
+    "robust": (robust_query, _robust_block, _robust_block),
+    "certified": (certified, _certified_block, _certified_block),
+}
+
+#: The arrays of a batch query: the endpoints, and the parameters of the answers.
+LAYOUT = Layout("segment", flags=(), arrays=(("vertices", 2),), extra=(("parameter", np.float64, 1),))
+
+
+def single_kernel(method):
+    """The one-query kernel of ``method``, compiled for :data:`~proximity._loops.SINGLE_ARGS`."""
+    return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
+
+
+@functools.cache
+def block(method, one):
+    """The block function of ``method``, called by the batch loop."""
+    func = KERNELS[method.name][2 if one else 1].py_func
+    return specialize(func, func.__name__, LAYOUT.block_signature, role="pointer")
+
+
+def exact(vertices, point):
+    """The certified method's exact answer to one query, as a flat tuple of the outputs."""
+    return _exact.segment(vertices, point)
+
+
+def query(method, vertices, points, out_shape, full):
+    """Run the batch kernel of ``method``; inputs are validated float64 3D arrays."""
+    return run(LAYOUT, sys.modules[__name__], method, (), (vertices,), points, out_shape, full)
+
+
+# The query of a stored row of a collection (see :mod:`proximity.primitives`):
+# bound per method.
+ROW_QUERY = None
+
+
+def _row(kind, q, k, px, py, pz):
+    """Stored row ``k`` of ``q``: the endpoints V0, V1."""
+    st, d, sqr, x, y, z, f, t = ROW_QUERY(q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], px, py, pz)
+    return st, d, sqr, x, y, z, f, t, math.nan, math.nan, False
+
+
+def row_query(primitive, method):
+    """The query of a stored segment row by ``method`` (see :mod:`proximity.primitives`)."""
+    return specialize(_row, method.name, role="inline", ROW_QUERY=KERNELS[method.name][0])
+
+
+@inline
+def _interval(kind, q, k, px, py, pz):
+    """Bounds ``(lo, hi)`` on the certified distance of stored row ``k``, as
+    :func:`proximity.point_triangle._interval` gives them."""
+    d = robust(q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], px, py, pz)[0]
+    m = 0.0
+    for v in range(2):
+        m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
+    w = 16.0 * EPS * (1.75 * m) + 5e-324  # the bound's absolute term, for subnormal distances
+    return d - w, d + w
+
+
+def row_interval(primitive):
+    """:func:`_interval`, the bounds of a stored segment row's certified distance."""
+    return _interval
+
+
+def resolve(code, params, point):
+    """The certified answers of stored rows ``params`` to ``point``, exact
+    fallback included: a dict of arrays, with ``extra`` and ``flag`` as a
+    stored row's answer holds them."""
+    r = query(CERTIFIED, params[:, :6].reshape(-1, 2, 3), point, (len(params),), True)
+    nan = np.full(len(params), np.nan)
+    extra = np.stack([r["parameter"], nan, nan], axis=1)
+    return dict(r, extra=extra, flag=np.zeros(len(params), np.bool_))

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BY_CODE", "CIRCLE", "DISK", "REGISTRY", "TRIANGLE", "Primitive", "vertex_counts"]
+__all__ = ["BY_CODE", "CIRCLE", "DISK", "REGISTRY", "SEGMENT", "TRIANGLE", "Primitive", "vertex_counts"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,9 +86,10 @@ class Primitive:
 TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),))
 DISK = Primitive("disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)))
 CIRCLE = Primitive("circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)))
+SEGMENT = Primitive("segment", 3, 6, 2, "point_segment", (("parameter", 1),), ("robust", "certified"))
 
 #: Every primitive, by name, in code order.
-REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE)}
+REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE, SEGMENT)}
 
 #: Every primitive, indexed by its code.
 BY_CODE = tuple(sorted(REGISTRY.values(), key=lambda p: p.code))
@@ -111,3 +112,8 @@ def present(kinds):
         return ()
     counts = np.bincount(kinds, minlength=len(BY_CODE))
     return tuple(p for p in BY_CODE if counts[p.code])
+
+
+def offering(method):
+    """The primitives that offer ``method`` (a :class:`~proximity.methods.Method`), in code order."""
+    return tuple(p for p in BY_CODE if method.name in p.methods)

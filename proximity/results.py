@@ -163,6 +163,27 @@ class TriangleResult(Result):
 
 
 @dataclass(frozen=True, repr=False)
+class SegmentResult(Result):
+    """Closest point on a segment.
+
+    Attributes
+    ----------
+    parameter : ndarray of float64, shape ``batch``
+        ``t`` in ``[0, 1]`` with ``point = V0 + t (V1 - V0)`` (up to
+        rounding): 0 on ``VERTEX0``, 1 on ``VERTEX1``.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> r = proximity.Segment([[0, 0, 0], [4, 0, 0]]).closest_point([[1, 1, 0], [9, 0, 0]])
+    >>> r.parameter.tolist(), r.point.tolist()
+    ([0.25, 1.0], [[1.0, 0.0, 0.0], [4.0, 0.0, 0.0]])
+    """
+
+    parameter: np.ndarray
+
+
+@dataclass(frozen=True, repr=False)
 class DiskResult(Result):
     """Closest point on a disk.
 
@@ -259,6 +280,9 @@ class SceneResult(Result):
     height, radial : ndarray of float64, shape ``batch``
         As in :class:`DiskResult` where the nearest primitive is a disk or
         a circle; NaN otherwise.
+    parameter : ndarray of float64, shape ``batch``
+        As in :class:`SegmentResult` where the nearest primitive is a
+        segment; NaN otherwise.
     equidistant : ndarray of bool, shape ``batch``
         As in :class:`CircleResult` where the nearest primitive is a
         circle; False otherwise.
@@ -283,6 +307,7 @@ class SceneResult(Result):
     height: np.ndarray
     radial: np.ndarray
     equidistant: np.ndarray
+    parameter: np.ndarray
 
 
 # One query's result from the nine values the fast path's kernels write in a
@@ -307,6 +332,18 @@ def triangle_from_row(row):
     fields["point"] = row[_POINT]
     fields["feature"] = _FEATURES[row.item(5)]
     fields["barycentric"] = row[_LAST3]
+    return result
+
+
+def segment_from_row(row):
+    """:class:`SegmentResult` of one fast-path query."""
+    result = _new(SegmentResult)
+    fields = result.__dict__
+    fields["distance"] = row[0]
+    fields["sqr_distance"] = row[1]
+    fields["point"] = row[_POINT]
+    fields["feature"] = _FEATURES[row.item(5)]
+    fields["parameter"] = row[6]
     return result
 
 

@@ -21,15 +21,17 @@ from ._validate import (
     require_finite,
 )
 from .methods import DEFAULT, REGISTRY, resolve
-from .primitives import CIRCLE, DISK, N_PARAMS, TRIANGLE
+from .primitives import CIRCLE, DISK, N_PARAMS, SEGMENT, TRIANGLE
 from .results import (
     CircleResult,
     DiskResult,
     Result,
+    SegmentResult,
     TriangleResult,
     circle_from_row,
     disk_from_row,
     format_repr,
+    segment_from_row,
     triangle_from_row,
 )
 
@@ -158,10 +160,21 @@ class Frozen:
 
 
 class _Facade(Frozen):
-    """Shared query plumbing: points, method and output shape."""
+    """Shared query plumbing: points, method and output shape.
+
+    Subclasses set ``_primitive``, their kind of primitive
+    (:mod:`proximity.primitives`), whose kernel module answers the queries.
+    """
 
     __slots__ = ()
-    methods = tuple(REGISTRY)
+
+    @property
+    def methods(self):
+        """The values ``method`` accepts: those of the kind of primitive."""
+        return self._primitive.methods
+
+    def _kernels(self):
+        return self._primitive.kernels
 
     def _prepare(self, points, method):
         method = check_method(method, self.methods)
@@ -184,7 +197,7 @@ class _Facade(Frozen):
         skips validation of the shape (done at construction), broadcasting
         and the batch kernel's thread launch.
         """
-        if self._args is None or type(method) is not str or method not in REGISTRY:
+        if self._args is None or type(method) is not str or method not in self.methods:
             return None
         if type(points) is not np.ndarray or points.dtype is not _FLOAT64:
             # What the batch path accepts (see as_float64), and nothing else:
@@ -264,7 +277,47 @@ class _Facade(Frozen):
         return self._result(**fields)
 
 
-class Triangle(_Facade):
+class _Hull(_Facade):
+    """Shapes that are the convex hull of a few vertices: triangles, segments, points.
+
+    Subclasses set the primitive, the number of vertices (``_corners``) and
+    the result type.
+    """
+
+    __slots__ = ("vertices", "batch_shape", "dim", "_vertices3", "_args")
+    _derived = ("_vertices3", "_args")
+    _corners = 3
+    _argument = "vertices"
+
+    def __init__(self, vertices, *, copy=False):
+        n = self._corners
+        expected = f"(..., {n}, D) with D = 2 or 3"
+        v = frozen_float64(vertices, "vertices", expected, copy)
+        if v.ndim < 2 or v.shape[-2] != n or v.shape[-1] not in (2, 3):
+            raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
+        require_finite(v, "vertices")
+        self._init(vertices=v, batch_shape=v.shape[:-2], dim=v.shape[-1])
+        self._init(**self._derive())
+
+    def _derive(self):
+        v = self.vertices
+        v3 = v if v.shape[-1] == 3 else frozen(_to_3d(v), new=True)
+        return {"_vertices3": v3, "_args": v3.ravel() if v.shape == (self._corners, 3) else None}
+
+    def __repr__(self):
+        return format_repr(self, ("vertices",))
+
+    def _query(self, points, method, full):
+        method, points, out_shape = self._prepare(points, method)
+        with _threads.kernel():
+            return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
+
+    def _rows(self):
+        """``(kinds, params)`` of the batch, in C order, as a collection stores them."""
+        return _rows(self._primitive, self._vertices3.reshape(-1, 3 * self._corners))
+
+
+class Triangle(_Hull):
     """A batch of triangles in 2D or 3D.
 
     Parameters
@@ -294,45 +347,50 @@ class Triangle(_Facade):
     [1.0, 1.414214]
     """
 
-    __slots__ = ("vertices", "batch_shape", "dim", "_vertices3", "_args")
-    _derived = ("_vertices3", "_args")
+    __slots__ = ()
+    _primitive = TRIANGLE
     _result = TriangleResult
     _from_row = staticmethod(triangle_from_row)
-
-    def __init__(self, vertices, *, copy=False):
-        expected = "(..., 3, D) with D = 2 or 3"
-        v = frozen_float64(vertices, "vertices", expected, copy)
-        if v.ndim < 2 or v.shape[-2] != 3 or v.shape[-1] not in (2, 3):
-            raise ValueError(f"vertices must have shape {expected}; got shape {v.shape}")
-        require_finite(v, "vertices")
-        self._init(vertices=v, batch_shape=v.shape[:-2], dim=v.shape[-1])
-        self._init(**self._derive())
-
-    def _derive(self):
-        v = self.vertices
-        v3 = v if v.shape[-1] == 3 else frozen(_to_3d(v), new=True)
-        return {"_vertices3": v3, "_args": v3.ravel() if v.shape == (3, 3) else None}
-
     _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
 
-    @staticmethod
-    def _kernels():
-        from . import point_triangle
 
-        return point_triangle
+class Segment(_Hull):
+    """A batch of line segments in 2D or 3D.
 
-    def __repr__(self):
-        return format_repr(self, ("vertices",))
+    Parameters
+    ----------
+    vertices : array_like, shape ``batch + (2, D)``
+        The endpoints ``V0, V1`` of each segment, finite, with D = 2 or 3.
+        A segment whose endpoints coincide is the point it is.
+    copy : bool, keyword-only, default False
+        As for :class:`Triangle`.
 
-    def _query(self, points, method, full):
-        method, points, out_shape = self._prepare(points, method)
-        with _threads.kernel():
-            return out_shape, self._kernels().query(method, self._vertices3, _to_3d(points), out_shape, full)
+    Notes
+    -----
+    The closest point is ``V0 + t (V1 - V0)`` with ``t`` the result's
+    ``parameter``, on feature ``VERTEX0`` (``t = 0``), ``VERTEX1``
+    (``t = 1``) or ``EDGE01``.  Methods: ``robust`` (within ``8 eps S +
+    2^-1075`` of the exact distance, ``S = max(|P - V0|, |P - V1|)``) and
+    ``certified`` (faithfully rounded, with the exact feature); the seed
+    documents have no segment algorithm, so there is no ``eberly``.
 
-    def _rows(self):
-        """``(kinds, params)`` of the batch, in C order, as a collection stores them."""
-        v = self._vertices3.reshape(-1, 9)
-        return _rows(TRIANGLE, v)
+    Examples
+    --------
+    >>> import proximity
+    >>> rod = proximity.Segment([[0, 0, 0], [2, 0, 0]])
+    >>> r = rod.closest_point([[0.5, 1, 0], [3, 0, 0], [-1, 0, 0]])
+    >>> r.distance.tolist(), r.feature_name.tolist(), r.parameter.tolist()
+    ([1.0, 1.0, 1.0], ['EDGE01', 'VERTEX1', 'VERTEX0'], [0.25, 1.0, 0.0])
+    >>> rod.methods
+    ('robust', 'certified')
+    """
+
+    __slots__ = ()
+    _primitive = SEGMENT
+    _corners = 2
+    _result = SegmentResult
+    _from_row = staticmethod(segment_from_row)
+    _entries = {}
 
 
 class _Round(_Facade):
@@ -342,12 +400,6 @@ class _Round(_Facade):
     _is_disk = False
 
     _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
-
-    @staticmethod
-    def _kernels():
-        from . import point_disk
-
-        return point_disk
 
     def __init__(self, center, normal, radius, *, copy=False):
         c = frozen_float64(center, "center", "(..., 3)", copy)
@@ -438,6 +490,7 @@ class Circle(_Round):
     """
 
     __slots__ = ()
+    _primitive = CIRCLE
     _result = CircleResult
     _from_row = staticmethod(circle_from_row)
 
@@ -459,6 +512,7 @@ class Disk(_Round):
     """
 
     __slots__ = ()
+    _primitive = DISK
     _result = DiskResult
     _from_row = staticmethod(disk_from_row)
     _is_disk = True

@@ -72,10 +72,11 @@ def test_compile_all_covers_every_method():
     from proximity import compile as compile_module
 
     jobs = [description for name in methods.REGISTRY for description, _ in compile_module._jobs(name)]
-    modules = {p.module for p in primitives.BY_CODE}
     for name in methods.REGISTRY:
+        offering = primitives.offering(methods.resolve(name))
+        modules = {p.module for p in offering}
         # One point, pairs and one shape per kernel module; a collection of each kind and of several.
-        expected = 3 * len(modules) + len(primitives.BY_CODE) + 1
+        expected = 3 * len(modules) + len(offering) + 1
         assert sum(f": {name}" in job for job in jobs) == expected, name
 
 

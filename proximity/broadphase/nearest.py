@@ -122,8 +122,9 @@ def nearest(tree, method, points, full, loose=False):
     # a sphere is equidistant from every face), so blocks are handed out
     # one at a time rather than split evenly between threads up front.
     # A tree of one kind gets a search compiled for that kind alone; any
-    # other, the one search for every kind (not one per combination).
-    kinds = tree.present if len(tree.present) == 1 else primitives.BY_CODE
+    # other, the one search for every kind that offers the method (not one
+    # per combination).
+    kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     with numba.parallel_chunksize(1):
         search_kernel(method, kinds)(arrays, tree.depth, magnitude, points, order, out, full)
     rows = np.flatnonzero(~np.isnan(out.undecided))
