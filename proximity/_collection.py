@@ -8,7 +8,7 @@ chosen once, at construction.
 
 import numpy as np
 
-from . import _threads
+from . import _lazy, _threads
 from ._validate import as_float64, frozen
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
@@ -43,8 +43,7 @@ class Collection(Frozen):
         if broad_phase == "auto":
             broad_phase = "brute" if n <= BRUTE_FORCE_MAX else "bvh"
         with _threads.kernel():
-            from . import bvh
-
+            bvh = _lazy.load("proximity.bvh")
             tree = build(bvh) if broad_phase == "bvh" else brute(bvh)
         return broad_phase, tree
 
@@ -76,7 +75,7 @@ class Collection(Frozen):
             object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
 
     def _restore_tree(self, hierarchy):
-        from . import bvh
+        bvh = _lazy.load("proximity.bvh")
 
         def read_only(array, dtype):
             return frozen(np.ascontiguousarray(array, dtype=dtype), dtype=dtype, new=True)
@@ -100,8 +99,7 @@ class Collection(Frozen):
         # (``Method.loose``); the hierarchy then bounds circles by the cube C +- R.
         loose = self._has_circles and method.loose
         with _threads.kernel():
-            from . import bvh
-
+            bvh = _lazy.load("proximity.bvh")
             out = bvh.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
         return out_shape, out
 

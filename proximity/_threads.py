@@ -25,6 +25,8 @@ import site
 import sys
 import threading
 
+from . import _lazy
+
 _ENV = "NUMBA_THREADING_LAYER"
 _LOCK = threading.RLock()
 _threadsafe = False  # set once the layer is known to be safe under threads
@@ -102,9 +104,7 @@ def kernel():
 def default_threads():
     """The number of threads Numba starts with: every core unless
     ``NUMBA_NUM_THREADS`` says otherwise."""
-    import numba
-
-    return numba.config.NUMBA_NUM_THREADS
+    return _lazy.load("numba").config.NUMBA_NUM_THREADS
 
 
 @contextlib.contextmanager
@@ -135,8 +135,7 @@ def threads(n=None):
     >>> bool((one == tri.distance(points)).all())   # the same answers on every core
     True
     """
-    import numba
-
+    numba = _lazy.load("numba")
     limit = numba.config.NUMBA_NUM_THREADS
     if n is None:
         n = limit

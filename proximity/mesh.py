@@ -12,6 +12,7 @@ every face, and why that never changes the answer, is in
 
 import numpy as np
 
+from . import _lazy
 from ._collection import Collection
 from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .results import MeshResult, format_repr
@@ -230,8 +231,7 @@ class TriangleMesh(Collection):
         """``(output shape, distances (n,), inside (n,))`` for :meth:`signed_distance`."""
         if sign not in SIGNS:
             raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
-        from . import _signed
-
+        _signed = _lazy.load("proximity._signed")
         signs = None
         if sign == "pseudonormal":
             signs = self._signs
@@ -271,6 +271,5 @@ class TriangleMesh(Collection):
 
 def _primitives(vertices, faces):
     """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
-    from . import bvh
-
+    bvh = _lazy.load("proximity.bvh")
     return np.zeros(len(faces), np.int8), bvh.triangle_params(vertices, faces)

@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import _counts, _pool, _threads
+from . import _counts, _lazy, _pool, _threads
 from ._validate import (
     as_float64,
     broadcast_batch,
@@ -210,8 +210,7 @@ class _Facade(Frozen):
 
     def _compile_single(self, method):
         """The one-query kernel of ``method``, as an entry point that skips Numba's dispatch."""
-        from ._loops import single_entry  # loads the compiler, as the kernels do
-
+        single_entry = _lazy.load("proximity._loops").single_entry  # loads the compiler, as the kernels do
         return single_entry(self._kernels().single_kernel(method)), method.exact_fallback
 
     def _certified_row(self, row, point):
@@ -316,9 +315,7 @@ class Triangle(_Facade):
 
     @staticmethod
     def _kernels():
-        from . import point_triangle
-
-        return point_triangle
+        return _lazy.load("proximity.point_triangle")
 
     def __repr__(self):
         return format_repr(self, ("vertices",))
@@ -339,9 +336,7 @@ class _Round(_Facade):
 
     @staticmethod
     def _kernels():
-        from . import point_disk
-
-        return point_disk
+        return _lazy.load("proximity.point_disk")
 
     def __init__(self, center, normal, radius, *, copy=False):
         c = frozen_float64(center, "center", "(..., 3)", copy)
@@ -466,8 +461,7 @@ def _unit_normals(center, normal, radius):
     the first argument with a non-finite entry, a negative radius or a zero
     normal."""
     if normal.size >= 3 * _COMPILED_UNIT:
-        from .point_disk import round_frames
-
+        round_frames = _lazy.load("proximity.point_disk").round_frames
         unit = _pool.empty(normal.shape)
         rows = normal.size // 3
         c = center.reshape(-1, 3) if center.size == normal.size else _NO_ROWS[:, :3]
