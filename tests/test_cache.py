@@ -7,7 +7,6 @@ cache.
 
 import ast
 import os
-import pathlib
 import resource
 import shutil
 import signal
@@ -16,6 +15,8 @@ import sys
 import warnings
 
 import pytest
+
+from tests import disks
 
 # A single point (its kernel compiled lazily, at the first call) and a batch
 # (its block and loop kernels compiled for their signatures at once).
@@ -113,56 +114,19 @@ def test_a_cache_that_cannot_be_written_compiles_in_memory(filled_cache, tmp_pat
     assert result.stderr.count(UNWRITABLE) == 1, result.stderr
 
 
-@pytest.fixture
-def small_tmpfs(tmp_path):
-    """A 1 MB tmpfs, mounted for the test."""
-    mount = tmp_path / "tmpfs"
-    mount.mkdir()
-    try:
-        made = subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(mount)], capture_output=True, text=True
-        )
-    except OSError as error:
-        made = error
-    if getattr(made, "returncode", 1) != 0:
-        pytest.skip(
-            f"cannot mount a tmpfs here ({getattr(made, 'stderr', made)!s:.80}); "
-            "test_a_cache_that_cannot_be_written_compiles_in_memory covers the failed writes"
-        )
-    try:
-        yield mount
-    finally:
-        subprocess.run(["umount", str(mount)], check=True)
-
-
-def _fill(directory):
-    """Write to ``directory`` until its filesystem is full."""
-    block = b"\0" * 4096
-    with open(pathlib.Path(directory) / "filler", "wb", buffering=0) as f:
-        try:
-            while True:
-                f.write(block)
-        except OSError:
-            pass
-        try:
-            while True:
-                f.write(b"\0")
-        except OSError:
-            pass
-
-
-def test_a_cache_on_a_full_disk(filled_cache, small_tmpfs):
+def test_a_cache_on_a_full_disk(filled_cache, tmpfs):
     _, expected = filled_cache
     expected = expected.splitlines()[0] + "\n"  # the single point's answer
-    warm = small_tmpfs / "warm"
+    disk = tmpfs(1 << 20)
+    warm = disk / "warm"
     assert _run(SINGLE, warm).stdout == expected  # with room to keep the kernel
-    _fill(small_tmpfs)
+    disks.fill(disk)
     # A full disk still serves the kernels it holds, with no warning ...
     result = _run(RECORD + SINGLE + COMPILED, warm)
     assert result.stdout == expected + "[]\n"
     assert "Warning" not in result.stderr
     # ... and kernels it cannot hold are compiled in memory, with one warning.
-    result = _run(SINGLE, small_tmpfs / "cold")
+    result = _run(SINGLE, disk / "cold")
     assert result.stdout == expected
     assert result.stderr.count(UNWRITABLE) == 1, result.stderr
     assert "No space left on device" in result.stderr
