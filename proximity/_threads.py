@@ -20,6 +20,7 @@ asked for is ``forksafe``: ``tbb`` where it can be loaded, else
 
 import contextlib
 import ctypes
+import operator
 import os
 import site
 import sys
@@ -139,8 +140,13 @@ def threads(n=None):
     limit = numba.config.NUMBA_NUM_THREADS
     if n is None:
         n = limit
-    if isinstance(n, bool) or not isinstance(n, int):
+    try:
+        index = operator.index(n)  # any integer, Python's or NumPy's
+    except TypeError:
+        index = None
+    if index is None or isinstance(n, bool):
         raise TypeError(f"n must be an int or None; got {type(n).__name__} {n!r}")
+    n = index
     if not 1 <= n <= limit:
         raise ValueError(f"n must be from 1 to {limit} (the threads Numba started); got {n}")
     with kernel():

@@ -30,11 +30,13 @@ Dask is imported when a function is called: ``pip install
 
 import collections
 import dataclasses
+import operator
 import os
 
 import numpy as np
 
 from . import _threads
+from ._validate import as_array
 from .mesh import TriangleMesh
 from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult
 from .scene import Scene
@@ -198,7 +200,7 @@ def _points(dask, shape, points):
     """``points`` as a dask array ``(N, D)`` with the columns in one chunk."""
     da = dask.array
     if not isinstance(points, da.Array):
-        points = np.asarray(points)
+        points = as_array(points, "points", f"(N, {shape.dim})")
         points = da.from_array(points, chunks=(CHUNK_ROWS, -1)) if points.ndim == 2 else points
     if points.ndim != 2 or points.shape[1] != shape.dim:
         raise ValueError(f"points must have shape (N, {shape.dim}); got shape {points.shape}")
@@ -210,14 +212,22 @@ def _points(dask, shape, points):
 
 
 def _check(shape, threads):
+    """``threads`` as an int (or None), once ``shape`` and ``threads`` are known to be valid."""
     _result_type(shape)
     if shape.batch_shape != ():
         raise ValueError(
-            f"proximity.dask takes a single shape (batch_shape ()); got a {type(shape).__name__} of "
-            f"batch_shape {shape.batch_shape}: gather many primitives in a TriangleMesh or a Scene"
+            f"shape must be a single shape (batch_shape ()) in proximity.dask; got a {type(shape).__name__} "
+            f"of batch_shape {shape.batch_shape}: gather many primitives in a TriangleMesh or a Scene"
         )
-    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
+    if threads is None:
+        return None
+    try:
+        count = operator.index(threads)  # any integer, Python's or NumPy's
+    except TypeError:
+        count = None
+    if count is None or isinstance(threads, bool) or count < 1:
         raise ValueError(f"threads must be a positive int or None; got {threads!r}")
+    return count
 
 
 def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
@@ -252,7 +262,7 @@ def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
     (((2, 1),), [2.0, 2.0, 1.0])
     """
     dask = _dask()
-    _check(shape, threads)
+    threads = _check(shape, threads)
     check_method(method, shape.methods)
     points = _points(dask, shape, points)
     shipped, per_host = _shipped(dask, shape)
@@ -292,12 +302,16 @@ def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
     (('distance', 'point'), [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
     """
     dask = _dask()
-    _check(shape, threads)
+    threads = _check(shape, threads)
     check_method(method, shape.methods)
     names = [f.name for f in dataclasses.fields(_result_type(shape))]
     if fields is not None:
-        fields = [fields] if isinstance(fields, str) else list(fields)
-        unknown = [name for name in fields if name not in names]
+        try:
+            fields = [fields] if isinstance(fields, str) else list(fields)
+        except TypeError:
+            kind = type(fields).__name__
+            raise TypeError(f"fields must be a str or a sequence of str; got {kind}") from None
+        unknown = [name for name in fields if not isinstance(name, str) or name not in names]
         if unknown or not fields:
             raise ValueError(f"fields must be names among {names}; got {fields}")
         names = fields

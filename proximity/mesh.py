@@ -14,7 +14,7 @@ import numpy as np
 
 from . import _lazy
 from ._collection import Collection
-from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
+from ._validate import as_array, as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .results import MeshResult, format_repr
 from .shapes import DEFAULT_METHOD, Triangle, keyword_only
 
@@ -82,7 +82,7 @@ class TriangleMesh(Collection):
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must have shape (V, 3); got shape {v.shape}")
         require_finite(v, "vertices")
-        f = np.asarray(faces)
+        f = as_array(faces, "faces", "(F, 3)")
         if f.dtype.kind not in "iu":
             raise ValueError(f"faces must be an integer array of shape (F, 3); got dtype {f.dtype}")
         if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] == 0:

@@ -243,6 +243,7 @@ def test_the_broad_phase_is_chosen_by_size():
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, -1, 2]], {}, "got -1"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.zeros((0, 3), int), {}, r"F >= 1; got shape \(0, 3\)"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], {"broad_phase": "kd"}, "broad_phase must be one of"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2], [0, 1]], {}, r"^faces must be an array of shape"),
     ],
 )
 def test_invalid_meshes_are_refused_with_a_message_naming_the_argument(vertices, faces, kwargs, message):
@@ -259,6 +260,16 @@ def test_invalid_queries_are_refused():
         mesh.distance(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="method must be one of"):
         mesh.closest_point([0, 0, 1], method="fast")
+
+
+@pytest.mark.parametrize("bad", [[[0, 0, 1], [0, 1]], [["a", "b", "c"]], {"a": 1}, [[2**1100, 0, 0]]])
+def test_the_trimesh_drop_in_names_points_it_cannot_read(bad):
+    from proximity.trimesh_compat import ProximityQuery, closest_point, signed_distance
+
+    mesh = ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    for query in (closest_point, signed_distance, lambda m, p: ProximityQuery(m).vertex(p)):
+        with pytest.raises(ValueError, match=r"^points must be an array of shape \(n, 3\)"):
+            query(mesh, bad)
 
 
 # -- the trimesh drop-in ---------------------------------------------------------------
