@@ -306,7 +306,10 @@ def _nearest_block(
     (otherwise NaN).
     """
     n = points.shape[0]
-    sentinel = index.shape[0]
+    # Above every caller's index, which may reach past the stored count
+    # where copies were left out (:func:`distinct`): an infinite answer,
+    # which ties with the initial ``best``, then still wins.
+    sentinel = np.iinfo(np.int64).max
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     # The previous point's closest point, a point of the collection: points

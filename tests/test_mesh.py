@@ -190,6 +190,25 @@ def test_extreme_coordinates_keep_brute_force_and_bvh_equal(scale, offset):
             assert np.isfinite(bvh.distance).all()
 
 
+def test_an_infinite_answer_after_a_left_out_copy_is_the_same_with_the_hierarchy():
+    """``eberly``'s squared distance overflows to inf for a point ``1e200``
+    from a unit triangle, and is NaN (no answer) on a triangle of edges
+    ``1e200``.  The answer is inf, from the unit triangle, with either broad
+    phase, though the hierarchy leaves out the copy of the large triangle
+    and so stores fewer primitives than the unit triangle's index."""
+    unit = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    point = [0.5, 0.5, 1e200]
+    vertices = np.concatenate([unit * 1e200, unit])
+    for broad_phase in ("brute", "bvh"):
+        mesh = TriangleMesh(vertices, [[0, 1, 2], [0, 1, 2], [3, 4, 5]], broad_phase=broad_phase)
+        r = mesh.closest_point(point, method="eberly")
+        assert (r.distance, r.face, r.feature) == (np.inf, 2, Feature.FACE), broad_phase
+        large = proximity.Triangle(unit * 1e200)
+        shapes = [large, large, proximity.Triangle(unit)]
+        r = proximity.Scene(shapes, broad_phase=broad_phase).closest_point(point, method="eberly")
+        assert (r.distance, r.primitive) == (np.inf, 2), broad_phase
+
+
 def test_permuting_faces_permutes_the_answer():
     vertices, faces = MESHES["icosphere"]
     points = _points("icosphere", n=60)
