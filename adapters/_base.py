@@ -29,8 +29,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 import proximity
-from proximity import Circle, Disk, Feature, Triangle, TriangleMesh
-from proximity.results import CircleResult, DiskResult, MeshResult, TriangleResult
+from proximity import Feature, TriangleMesh, primitives
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -525,15 +524,16 @@ class Backend:
             a documented tolerance per row and a description of the model.
         """
         if not isinstance(shape, proximity.Shape):
-            raise TypeError(
-                f"shape must be a proximity shape (Triangle, Circle, Disk); got {type(shape).__name__}"
-            )
+            raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
         method = best_method(shape)
         # proximity validates the points (and names the argument) and gives
         # the geometry every answer is checked against.
         reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
         out_shape = reference.shape
         kind, data, check_shape = _flatten_shape(shape)
+        if kind not in self.primitives:
+            kinds = ", ".join(self.primitives)
+            raise NotImplementedError(f"the {self.name} backend has no model of a {kind}; it has {kinds}")
         points3 = _to_3d(np.asarray(points, dtype=np.float64))
         all_points = np.broadcast_to(points3, out_shape + (3,)).reshape(-1, 3)
         n = all_points.shape[0]
@@ -601,7 +601,7 @@ class Backend:
             rtol=self.rtol,
             frame=self.frame,
         )
-        result, unknown = _result(kind, shape.dim, out_shape, distance, point, face)
+        result, unknown = _result(shape.result_type, shape.dim, out_shape, distance, point, face)
         return BackendResult(
             result=result,
             failure=failure.reshape(out_shape),
@@ -633,25 +633,32 @@ def _to_3d(array):
 def _flatten_shape(shape):
     """``(kind, flattened data, the shape in 3D for the geometric checks)``.
 
-    A 2D triangle is checked as its embedding in ``z = 0``, so that a
-    returned point off that plane counts as off the shape.
+    A primitive batch's data are its constructor's arrays (broadcast over
+    the batch, one row per member, coordinates in 3D, normals of unit
+    length), under their names; its kind is its primitive's name.  A 2D
+    shape is checked as its embedding in ``z = 0``, so that a returned point
+    off that plane counts as off the shape.
     """
     batch = shape.batch_shape
-    if isinstance(shape, Triangle):
-        vertices = _to_3d(np.asarray(shape.vertices)).reshape(-1, 3, 3)
-        check = shape if shape.dim == 3 else Triangle(vertices.reshape(batch + (3, 3)))
-        return "triangle", {"vertices": vertices}, check
-    if isinstance(shape, (Disk, Circle)):
-        center = np.broadcast_to(shape.center, batch + (3,)).reshape(-1, 3)
-        normal = unit(np.broadcast_to(shape.normal, batch + (3,)).reshape(-1, 3))
-        radius = np.broadcast_to(shape.radius, batch).reshape(-1).astype(np.float64)
-        kind = "disk" if isinstance(shape, Disk) else "circle"
-        return kind, {"center": center, "normal": normal, "radius": radius}, shape
     if isinstance(shape, TriangleMesh):
         return "mesh", {"vertices": shape.vertices, "faces": shape.faces}, shape
-    raise TypeError(
-        f"backends answer for Triangle, Disk, Circle and TriangleMesh; got {type(shape).__name__}"
-    )
+    primitive = getattr(shape, "_primitive", None)
+    if primitive is None:
+        raise TypeError(f"backends answer for primitive batches and TriangleMesh; got {type(shape).__name__}")
+    data, embedded = {}, []
+    for name, core in shape._fields:
+        array = np.asarray(getattr(shape, name))
+        array = np.broadcast_to(array, batch + array.shape[array.ndim - core :])
+        if core and array.shape[-1] == shape.dim:  # coordinates
+            array = _to_3d(array)
+        embedded.append(array)
+        data[name] = array.reshape((-1,) + array.shape[len(batch) :]).astype(np.float64)
+    if "normal" in data:
+        data["normal"] = unit(data["normal"])
+    if "position" in data:
+        data["vertices"] = data.pop("position")[:, None, :]
+    check = shape if shape.dim == 3 else type(shape)(*embedded)
+    return primitive.name, data, check
 
 
 def error_scale(shape, points):
@@ -674,7 +681,7 @@ def error_scale(shape, points):
 def _scales(kind, data, index, points):
     """Per row: proximity's error scale ``S`` and the coordinate magnitude ``M``."""
     magnitude = np.max(np.abs(points), axis=1, initial=0.0)
-    if kind == "triangle":
+    if kind != "mesh" and "vertices" in data:  # the hull of its vertices
         v = data["vertices"][index]
         scale = np.max(norm(v - points[:, None, :]), axis=1, initial=0.0)
         magnitude = np.maximum(magnitude, np.max(np.abs(v), axis=(1, 2), initial=0.0))
@@ -720,36 +727,34 @@ def _translate(distance, point, failure, points, tolerance, reference, check_sha
     failure[inconsistent] = Failure.INCONSISTENT
 
 
-def _result(kind, dim, out_shape, distance, point, face=None):
-    """proximity's result type, with the fields no library gives set to 'unknown'."""
+def _result(result_type, dim, out_shape, distance, point, face=None):
+    """proximity's result type, with the fields no library gives set to
+    'unknown' (NaN, False, or face -1), and their names."""
     feature = np.full(out_shape, Feature.NONE, dtype=np.int8)
     with np.errstate(over="ignore", under="ignore"):
         # As in proximity, the square may leave the float64 range; the distance does not.
         sqr_distance = distance * distance
-    common = dict(
+    values = dict(
         distance=distance.reshape(out_shape),
         sqr_distance=sqr_distance.reshape(out_shape),
         point=point.reshape(out_shape + (3,))[..., :dim].copy(),
         feature=feature,
     )
-    if kind == "triangle":
-        return TriangleResult(**common, barycentric=np.full(out_shape + (3,), np.nan)), (
-            "feature",
-            "barycentric",
-        )
-    if kind == "mesh":
-        unknown = ("feature", "barycentric") if face is not None else ("feature", "barycentric", "face")
-        if face is None:
-            face = np.full(out_shape, -1, dtype=np.int64)
-        return MeshResult(
-            **common, barycentric=np.full(out_shape + (3,), np.nan), face=face.reshape(out_shape)
-        ), unknown
-    rounds = dict(height=np.full(out_shape, np.nan), radial=np.full(out_shape, np.nan))
-    if kind == "disk":
-        return DiskResult(**common, **rounds), ("feature", "height", "radial")
-    return CircleResult(**common, **rounds, equidistant=np.zeros(out_shape, dtype=bool)), (
-        "feature",
-        "height",
-        "radial",
-        "equidistant",
-    )
+    unknown = ["feature"]
+    widths = {name: width for p in primitives.BY_CODE for name, width in p.extra}
+    for field in fields(result_type):
+        name = field.name
+        if name in values:
+            continue
+        if name == "face" and face is not None:
+            values[name] = face.reshape(out_shape)
+            continue
+        unknown.append(name)
+        if name == "face":
+            values[name] = np.full(out_shape, -1, dtype=np.int64)
+        elif widths.get(name) == 0:
+            values[name] = np.zeros(out_shape, dtype=bool)
+        else:
+            width = widths.get(name, 1)
+            values[name] = np.full(out_shape + ((width,) if width > 1 else ()), np.nan)
+    return result_type(**values), tuple(unknown)

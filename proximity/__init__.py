@@ -43,33 +43,40 @@ _map_source_adapters()
 from . import _pool  # noqa: E402
 from ._counts import stats as certified_stats  # noqa: E402
 from ._threads import threads  # noqa: E402
+from .inflated import Capsule, Inflated, Sphere  # noqa: E402
 from .mesh import TriangleMesh  # noqa: E402
 from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
     Feature,
     MeshResult,
+    PointResult,
     Result,
     SceneResult,
     SegmentResult,
     TriangleResult,
 )
 from .scene import Scene  # noqa: E402
-from .shapes import DEFAULT_METHOD, Circle, Disk, Segment, Shape, Triangle  # noqa: E402
+from .shapes import DEFAULT_METHOD, Circle, Disk, Point, Segment, Shape, Triangle  # noqa: E402
 
 __all__ = [
+    "Capsule",
     "Circle",
     "CircleResult",
     "Disk",
     "DiskResult",
     "Feature",
+    "Inflated",
     "MeshResult",
+    "Point",
+    "PointResult",
     "Result",
     "Scene",
     "SceneResult",
     "Segment",
     "SegmentResult",
     "Shape",
+    "Sphere",
     "Triangle",
     "TriangleMesh",
     "TriangleResult",
@@ -83,7 +90,7 @@ __all__ = [
 __version__ = "0.1.0"
 
 
-_SHAPES = (Triangle, Segment, Circle, Disk, TriangleMesh, Scene)
+_SHAPES = (Triangle, Segment, Point, Circle, Disk, TriangleMesh, Scene, Inflated, Sphere, Capsule)
 _SHAPE_TYPES = frozenset(_SHAPES)
 
 

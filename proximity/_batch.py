@@ -119,9 +119,13 @@ _records = {}
 
 
 def _record(name, fields):
+    """The namedtuple class ``name``, a global of this module: Numba's cache
+    keys hold the compiled signatures, whose record types it pickles by
+    reference to their class."""
     key = (name, fields)
     if key not in _records:
-        _records[key] = collections.namedtuple(name, fields)
+        cls = collections.namedtuple(name, fields, module=__name__)
+        globals()[name] = _records[key] = cls
     return _records[key]
 
 

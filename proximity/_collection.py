@@ -8,7 +8,7 @@ chosen once, at construction.
 
 import numpy as np
 
-from . import _threads
+from . import _lazy, _threads
 from ._validate import as_float64, frozen
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
@@ -43,8 +43,7 @@ class Collection(Frozen):
         if broad_phase == "auto":
             broad_phase = "brute" if n <= BRUTE_FORCE_MAX else "bvh"
         with _threads.kernel():
-            from . import broadphase
-
+            broadphase = _lazy.load("proximity.broadphase")
             tree = build(broadphase) if broad_phase == "bvh" else brute(broadphase)
         return broad_phase, tree
 
@@ -76,7 +75,7 @@ class Collection(Frozen):
             object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
 
     def _restore_tree(self, hierarchy):
-        from . import broadphase
+        broadphase = _lazy.load("proximity.broadphase")
 
         def read_only(array, dtype):
             return frozen(np.ascontiguousarray(array, dtype=dtype), dtype=dtype, new=True)
@@ -100,10 +99,39 @@ class Collection(Frozen):
         # the seed's circle); the hierarchy then has looser boxes for it.
         loose = self._tree.loose and method.loose
         with _threads.kernel():
-            from . import broadphase
-
+            broadphase = _lazy.load("proximity.broadphase")
             out = broadphase.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
+        if self._tree.radius >= 0:
+            self._rounded(out, points.reshape(-1, 3), full)
         return out_shape, out
+
+    def _rounded(self, out, points, full):
+        """The search's answers for rounded primitives (signed ``d - r``) as a
+        collection's: the distance ``max(d - r, 0)``, the signed one kept as
+        ``signed_distance``, and closest points moved to the rounded surface."""
+        from ._rounding import surface_points
+
+        signed = out["distance"]
+        distance = np.maximum(signed, 0.0) + 0.0
+        out.update(distance=distance, signed_distance=signed)
+        if not full:
+            return
+        index = out["index"]
+        found = index >= 0
+        kinds, params = self._primitives(np.where(found, index, 0))
+        radius = np.where(found, params[:, self._tree.radius], np.nan)
+        with np.errstate(invalid="ignore"):
+            core = signed + radius
+        rows_of = lambda rows: (kinds[rows], params[rows])  # noqa: E731
+        out["point"] = surface_points(points, out["point"], core, radius, rows_of)
+        out["sqr_distance"] = distance * distance
+
+    def inflated(self, radius):
+        """The points within ``radius`` of the collection's surface: a thick
+        shell of a mesh, rounded primitives of a scene (:class:`proximity.Inflated`)."""
+        from .inflated import Inflated
+
+        return Inflated(self, radius)
 
     def distance(self, points, *args, method=DEFAULT_METHOD):
         """Distance from each point to the nearest primitive.
@@ -159,5 +187,23 @@ class Collection(Frozen):
         if args:
             raise keyword_only(self, "closest_point", args)
         out_shape, out = self._query(points, method, full=True)
+        out.pop("signed_distance", None)
         fields = {name: value.reshape(out_shape + value.shape[1:]) for name, value in out.items()}
         return self._result(fields)
+
+    def signed_distance(self, points, *args, method=DEFAULT_METHOD):
+        """Signed distance to the nearest primitive: ``d - r`` for a rounded
+        one, negative inside it (:class:`proximity.Inflated`); for the
+        others, the distance.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> scene = proximity.Scene([proximity.Sphere([0, 0, 0], 1.0), proximity.Point([3, 0, 0])])
+        >>> scene.signed_distance([[0, 0, 0.5], [2, 0, 0]]).tolist()
+        [-0.5, 1.0]
+        """
+        if args:
+            raise keyword_only(self, "signed_distance", args)
+        out_shape, out = self._query(points, method, full=False)
+        return out.get("signed_distance", out["distance"]).reshape(out_shape)[()]

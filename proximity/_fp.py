@@ -122,3 +122,32 @@ def unscale(x, g):
 def edge_function(nx, ny, nz, vx, vy, vz, ex, ey, ez):
     # n . (v x e): twice the signed area of (projection of P, v, v + e), times |n|.
     return nx * (vy * ez - vz * ey) + ny * (vz * ex - vx * ez) + nz * (vx * ey - vy * ex)
+
+
+@inline
+def ulp(x):
+    """The spacing of the floats at ``|x|``, toward larger magnitudes
+    (``np.spacing``): ``2^(e - 53)`` for ``|x|`` in ``[2^(e-1), 2^e)``,
+    ``2^-1074`` for subnormals and zero."""
+    if x == 0.0:
+        return 5e-324
+    e = math.frexp(abs(x))[1]
+    return math.ldexp(1.0, max(e - 53, -1074))
+
+
+@inline
+def faithful_difference(d, r):
+    """``(ok, e)``: ``e = d - r`` rounded, and whether ``e`` is faithful for
+    ``d* - r`` whatever ``d*`` within ``ulp(d)`` of ``d`` (``d*`` equal to
+    ``d`` where ``d`` is 0), as a faithfully rounded distance ``d`` allows.
+
+    The subtraction's error is exact (Knuth's TwoSum); ``e`` is faithful
+    where it and the uncertainty of ``d`` stay within half the spacing at
+    ``e``, the nearer neighbour's distance at most.
+    """
+    e = d - r
+    back = e - d
+    err = (d - (e - back)) + (-r - back)
+    u = 0.0 if d == 0.0 else ulp(d)
+    gap = 5e-324 if e == 0.0 else 0.5 * ulp(e)
+    return (abs(err) + u) * (1.0 + 2.0**-50) < gap, e

@@ -11,7 +11,7 @@ Three decorators and three functions, used by every kernel module:
     batch loop, a scalar query), where LLVM decides whether to inline.
 ``kernel``
     A compiled function that is cached on disk, where a cache can be kept
-    (see :data:`CACHE`).
+    (see :mod:`proximity._cache`).
 :func:`specialize`
     A kernel written once and compiled per method: its body refers to
     upper-case global names (``QUERY``, ``EVALUATE``, ...) that
@@ -24,64 +24,29 @@ Three decorators and three functions, used by every kernel module:
     address where Numba's internals allow it, so that the loop compiles
     once for every method and the block is not compiled again inside it.
 
-The cache sits next to the sources (Numba's default).  Where that directory
-cannot be written (a read-only install), Numba's user-wide cache directory
-is used, or ``NUMBA_CACHE_DIR`` when it is set; where none can be written,
-kernels are compiled in memory at every start, with a warning.
+Where the disk cache is kept, and how it survives damaged files and full
+disks, is :mod:`proximity._cache`.
 """
 
 import functools
 import hashlib
 import os
-import tempfile
 import threading
 import types
-import warnings
 
 from llvmlite import ir
 from numba import njit
 from numba.core import cgutils
 from numba.core import types as nb_types
 from numba.extending import intrinsic
-from numba.misc.appdirs import user_cache_dir
+
+from ._cache import compiled
 
 _OPTIONS = {"error_model": "numpy"}
 # Helpers are called from compiled code only: no wrappers for Python callers
 # or for first-class function pointers, which would cost compile time.
 _PART = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True, **_OPTIONS}
 _INLINE = {"forceinline": True, **_PART}
-
-
-def _writable(directory):
-    """Whether files can be created in ``directory`` (made if missing)."""
-    try:
-        os.makedirs(directory, exist_ok=True)
-        with tempfile.TemporaryFile(dir=directory):
-            pass
-    except OSError:
-        return False
-    return True
-
-
-def _cache_usable():
-    configured = os.environ.get("NUMBA_CACHE_DIR")
-    if configured:
-        return _writable(configured)
-    here = os.path.dirname(os.path.abspath(__file__))
-    return _writable(os.path.join(here, "__pycache__")) or _writable(
-        user_cache_dir(appname="numba", appauthor=False)
-    )
-
-
-#: Whether compiled kernels are kept on disk.
-CACHE = _cache_usable()
-if not CACHE:
-    warnings.warn(
-        "proximity: no writable cache directory (the package's, the user cache or NUMBA_CACHE_DIR); "
-        "kernels will be compiled again in every process",
-        RuntimeWarning,
-        stacklevel=2,
-    )
 
 
 def inline(func):
@@ -106,7 +71,7 @@ def kernel(*signature, parallel=False):
     """
 
     def decorate(func):
-        return njit(*signature, parallel=parallel, cache=CACHE, **_OPTIONS)(_stamped(func, func.__globals__))
+        return compiled(_stamped(func, func.__globals__), signature, parallel=parallel, **_OPTIONS)
 
     return decorate
 
@@ -178,11 +143,11 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
             copy = _stamped(func, namespace, tag)
             args = (signature,) if signature is not None else ()
             if role == "pointer":
-                kernel_ = njit(*args, cache=CACHE, no_cpython_wrapper=True, **_OPTIONS)(copy)
+                kernel_ = compiled(copy, args, no_cpython_wrapper=True, **_OPTIONS)
             elif role != "kernel":
                 kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:
-                kernel_ = njit(*args, parallel=parallel, cache=CACHE, **_OPTIONS)(copy)
+                kernel_ = compiled(copy, args, parallel=parallel, **_OPTIONS)
             _specialised[key] = kernel_
     return kernel_
 

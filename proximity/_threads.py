@@ -20,10 +20,13 @@ asked for is ``forksafe``: ``tbb`` where it can be loaded, else
 
 import contextlib
 import ctypes
+import operator
 import os
 import site
 import sys
 import threading
+
+from . import _lazy
 
 _ENV = "NUMBA_THREADING_LAYER"
 _LOCK = threading.RLock()
@@ -102,9 +105,7 @@ def kernel():
 def default_threads():
     """The number of threads Numba starts with: every core unless
     ``NUMBA_NUM_THREADS`` says otherwise."""
-    import numba
-
-    return numba.config.NUMBA_NUM_THREADS
+    return _lazy.load("numba").config.NUMBA_NUM_THREADS
 
 
 @contextlib.contextmanager
@@ -135,13 +136,17 @@ def threads(n=None):
     >>> bool((one == tri.distance(points)).all())   # the same answers on every core
     True
     """
-    import numba
-
+    numba = _lazy.load("numba")
     limit = numba.config.NUMBA_NUM_THREADS
     if n is None:
         n = limit
-    if isinstance(n, bool) or not isinstance(n, int):
+    try:
+        index = operator.index(n)  # any integer, Python's or NumPy's
+    except TypeError:
+        index = None
+    if index is None or isinstance(n, bool):
         raise TypeError(f"n must be an int or None; got {type(n).__name__} {n!r}")
+    n = index
     if not 1 <= n <= limit:
         raise ValueError(f"n must be from 1 to {limit} (the threads Numba started); got {n}")
     with kernel():

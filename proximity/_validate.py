@@ -7,11 +7,17 @@ import numpy as np
 _REAL = frozenset("iuf")
 
 
-def _real(value, name, expected):
+def as_array(value, name, expected, dtype=None):
+    """``np.asarray(value, dtype)``, or a ValueError naming ``name`` where it
+    cannot be converted (a ragged sequence, strings for numbers)."""
     try:
-        array = np.asarray(value)
+        return np.asarray(value, dtype=dtype)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
+
+
+def _real(value, name, expected):
+    array = as_array(value, name, expected)
     if array.dtype.kind not in _REAL:
         raise ValueError(
             f"{name} must be a real numeric array of shape {expected}; got dtype {array.dtype} "

@@ -24,10 +24,18 @@ every core, without Dask; ``--workers N`` starts a local Dask cluster of
 The output is written to ``OUT.partial`` and renamed to ``OUT`` once
 complete: a job that stops midway (an error, Ctrl-C, SIGTERM) removes it,
 and one that is killed leaves only ``OUT.partial``.  Rows of ``POINTS``
-holding NaN or inf get NaN distances and a warning with their count.
+holding NaN or inf get NaN distances and a warning with their count;
+chunks missing from a zarr array's store read as its fill value, with a
+warning that counts them.
+
+Bad input, an ``OUT`` that is one of the inputs (the same file, under any
+name or link), and an ``OUT`` that cannot be written (a read-only
+directory, a full disk) end the command with status 2 and an ``error:``
+line on stderr, leaving no ``OUT.partial``.
 """
 
 import argparse
+import errno
 import json
 import os
 import shutil
@@ -45,6 +53,10 @@ INSTALL = "pip install 'proximity3d[scale]'"
 
 class InputError(Exception):
     """Bad input: a message naming the file and what is wrong with it."""
+
+
+class OutputError(Exception):
+    """OUT cannot be written: a message naming it and why."""
 
 
 # --- Input ---------------------------------------------------------------------------------------
@@ -69,6 +81,19 @@ def _zarr():
 def _is_zarr(path):
     markers = ("zarr.json", ".zarray")  # zarr 3, zarr 2
     return path.suffix == ".zarr" or (path.is_dir() and any((path / m).exists() for m in markers))
+
+
+def _ply_vertices(path):
+    """The number of vertices the header of the ``.ply`` file at ``path``
+    declares, or None where it declares none."""
+    with open(path, "rb") as f:
+        header = f.read(1 << 16)
+    end = header.find(b"end_header")
+    for line in header[: max(end, 0)].decode("ascii", "replace").splitlines():
+        words = line.split()
+        if words[:2] == ["element", "vertex"] and len(words) == 3 and words[2].isdigit():
+            return int(words[2])
+    return None
 
 
 def read_mesh(path):
@@ -96,11 +121,14 @@ class Points:
     """Rows of a point file, read a chunk at a time; picklable (it holds the path).
 
     ``points[a:b]`` is a new float64 array of rows ``a`` to ``b``.
+    ``missing_chunks`` counts the chunks absent from a zarr array's store,
+    whose rows read as its ``fill_value`` (0 for the other kinds).
     """
 
     def __init__(self, path):
         path = Path(path)
         self.path = str(path)
+        self.missing_chunks, self.chunks, self.fill_value = 0, 1, None
         if not path.exists():
             raise InputError(f"POINTS {self.path!r} does not exist")
         if _is_zarr(path):
@@ -109,6 +137,11 @@ class Points:
                 array = _zarr().open_array(self.path, mode="r")
             except Exception as exc:
                 raise InputError(f"cannot read POINTS {self.path!r} as a zarr array: {exc}") from None
+            initialized = getattr(array, "nchunks_initialized", None)
+            if initialized is not None:
+                self.chunks = int(array.nchunks)
+                self.missing_chunks = self.chunks - int(initialized)
+                self.fill_value = np.asarray(array.fill_value).item()
             self._array = None
         elif path.suffix == ".npy":
             self.kind = "npy"
@@ -128,6 +161,14 @@ class Points:
             except Exception as exc:
                 raise InputError(f"cannot read POINTS {self.path!r} as a .ply file: {exc}") from None
             array = np.asarray(getattr(loaded, "vertices", np.empty((0, 0))))
+            # trimesh refuses a truncated binary file, but reads an ASCII one
+            # that ends early as the rows it holds.
+            declared = _ply_vertices(path)
+            if declared is not None and declared != len(array):
+                raise InputError(
+                    f"POINTS {self.path!r} declares {declared:,} vertices but holds {len(array):,} "
+                    "(a truncated file?)"
+                )
             self._array = array
         else:
             raise InputError(f"POINTS {self.path!r}: expected a .npy or .ply file or a zarr array")
@@ -168,13 +209,43 @@ def _fields(closest_points, faces):
     return np.dtype([(n, {"point": ("f8", (3,)), "face": "i8"}.get(n, "f8")) for n in names])
 
 
+def _clashes(target, source):
+    """How writing ``target`` would replace or remove ``source`` (``"is"``:
+    the same file, through symbolic or hard links; ``"holds"``: a directory
+    that holds it), or None."""
+    try:
+        if os.path.samefile(target, source):
+            return "is"
+    except OSError:  # either does not exist
+        return None
+    if os.path.isdir(target) and Path(source).resolve().is_relative_to(Path(target).resolve()):
+        return "holds"
+    return None
+
+
+def check_not_an_input(label, target, inputs):
+    """Raise :class:`InputError` if ``target`` is or holds one of ``inputs``, ``(label, path)`` pairs."""
+    for name, source in inputs:
+        clash = _clashes(target, source)
+        if clash is not None:
+            what = " (the same file)" if clash == "is" else ""
+            raise InputError(
+                f"{label} {str(target)!r} {clash} {name} {str(source)!r}{what}: "
+                "writing it would replace the input"
+            )
+
+
 class Output:
     """The output being written: ``OUT.partial`` until :meth:`commit`.
 
-    Picklable (it holds paths): Dask workers write their own chunks.
+    Picklable (it holds paths): Dask workers write their own chunks.  A
+    failure to write (a read-only directory, a full disk) raises
+    :class:`OutputError`; :meth:`discard` then removes ``OUT.partial``.
+    ``inputs`` are ``(label, path)`` pairs that neither ``OUT`` nor
+    ``OUT.partial`` may be.
     """
 
-    def __init__(self, path, n, dtype, chunk):
+    def __init__(self, path, n, dtype, chunk, inputs=()):
         path = Path(path)
         self.path = str(path)
         self.partial = str(path) + ".partial"
@@ -187,19 +258,38 @@ class Output:
             raise InputError(f"OUT {self.path!r}: expected a .npy file or a .zarr directory")
         if not path.parent.is_dir():
             raise InputError(f"OUT {self.path!r}: directory {str(path.parent)!r} does not exist")
+        if self.kind == "npy" and path.is_dir():
+            raise InputError(f"OUT {self.path!r} is a directory")
+        check_not_an_input("OUT", self.path, inputs)
+        check_not_an_input("OUT's partial file", self.partial, inputs)
+        try:
+            self._create(n, chunk)
+        except OSError as exc:
+            self.discard()
+            raise self._error(exc) from None
+
+    def _create(self, n, chunk):
         self._remove(self.partial)
         if self.kind == "npy":
             # Distances alone as a plain array; more fields as records.
-            stored = np.dtype(np.float64) if dtype.names == ("distance",) else dtype
-            out = np.lib.format.open_memmap(self.partial, mode="w+", dtype=stored, shape=(n,))
-            del out  # sized on disk; chunks map their own rows
+            stored = np.dtype(np.float64) if self.dtype.names == ("distance",) else self.dtype
+            header = {"descr": np.lib.format.dtype_to_descr(stored), "fortran_order": False, "shape": (n,)}
+            with open(self.partial, "wb") as f:
+                np.lib.format.write_array_header_1_0(f, header)
+                self._offset = f.tell()
+                size = self._offset + n * stored.itemsize
+                f.truncate(size)
+                _reserve(f, size)
         else:
             group = _zarr().open_group(self.partial, mode="w")
-            for name in dtype.names:
-                base, tail = dtype[name].base, dtype[name].shape
+            for name in self.dtype.names:
+                base, tail = self.dtype[name].base, self.dtype[name].shape
                 fill = -1 if base.kind == "i" else float("nan")
                 rows = (max(1, min(chunk, n)),)
                 group.create_array(name, shape=(n,) + tail, chunks=rows + tail, dtype=base, fill_value=fill)
+
+    def _error(self, exc):
+        return OutputError(f"cannot write OUT {self.path!r}: {exc.strerror or exc}")
 
     @staticmethod
     def _remove(path):
@@ -210,32 +300,54 @@ class Output:
 
     def write(self, start, table):
         """Write the records ``table`` as rows ``start`` on."""
-        stop = start + len(table)
-        if self.kind == "npy":
-            out = np.load(self.partial, mmap_mode="r+")
-            if out.dtype.names:
-                out[start:stop] = table
+        try:
+            if self.kind == "npy":
+                # Written through the file rather than a memory map, whose
+                # writes to a full disk kill the process (SIGBUS).
+                rows = table if self.dtype.names != ("distance",) else table["distance"]
+                rows = np.ascontiguousarray(rows)
+                with open(self.partial, "r+b") as f:
+                    f.seek(self._offset + start * rows.itemsize)
+                    f.write(rows.view(np.uint8))
             else:
-                out[start:stop] = table["distance"]
-            out.flush()
-            del out
-        else:
-            group = _zarr().open_group(self.partial, mode="r+")
-            for name in table.dtype.names:
-                group[name][start:stop] = table[name]
+                group = _zarr().open_group(self.partial, mode="r+")
+                for name in table.dtype.names:
+                    group[name][start : start + len(table)] = table[name]
+        except OSError as exc:
+            raise self._error(exc) from None
 
     def commit(self):
         """Rename ``OUT.partial`` to ``OUT``, replacing what was there."""
-        if self.kind == "npy":
-            with open(self.partial, "rb+") as f:
-                os.fsync(f.fileno())
-            os.replace(self.partial, self.path)
-        else:
-            self._remove(self.path)
-            os.replace(self.partial, self.path)
+        try:
+            if self.kind == "npy":
+                with open(self.partial, "rb+") as f:
+                    os.fsync(f.fileno())
+                os.replace(self.partial, self.path)
+            else:
+                self._remove(self.path)
+                os.replace(self.partial, self.path)
+        except OSError as exc:
+            raise self._error(exc) from None
 
     def discard(self):
-        self._remove(self.partial)
+        try:
+            self._remove(self.partial)
+        except OSError:
+            pass  # nothing more to be done; the error that led here is reported
+
+
+def _reserve(f, size):
+    """Allocate the first ``size`` bytes of the open file ``f`` on disk where
+    the system can, so that a disk too small for the output fails the job
+    before its queries rather than after."""
+    if not size or not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        os.posix_fallocate(f.fileno(), 0, size)
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise
+        # Not supported by this filesystem: a full disk fails the writes instead.
 
 
 def _write_block(table, output, block_info=None):
@@ -417,10 +529,21 @@ def main(argv=None):
         try:
             mesh = read_mesh(args.mesh)
             points = Points(args.points)
-            output = Output(args.out, len(points), _fields(args.closest_points, args.faces), args.chunk)
-        except InputError as exc:
+            inputs = [("MESH", args.mesh), ("POINTS", args.points)]
+            if args.summary:
+                check_not_an_input("--summary", args.summary, inputs)
+            fields = _fields(args.closest_points, args.faces)
+            output = Output(args.out, len(points), fields, args.chunk, inputs)
+        except (InputError, OutputError) as exc:
             print(f"{NAME}: error: {exc}", file=sys.stderr)
             return 2
+        if points.missing_chunks:
+            print(
+                f"{NAME}: warning: {points.missing_chunks:,} of {points.chunks:,} chunks of POINTS "
+                f"{args.points!r} are missing from its store: their rows read as its fill value "
+                f"({points.fill_value!r})",
+                file=sys.stderr,
+            )
         setup = time.perf_counter() - started
         if args.scheduler or args.workers:
             try:
@@ -436,14 +559,18 @@ def main(argv=None):
         bar = _progress(len(points), show)
         query_start = time.perf_counter()
         try:
-            if client is None:
-                nan = run_local(mesh, points, output, args.chunk, args.method, args.threads, bar)
-            else:
-                nan = run_dask(client, mesh, points, output, args.chunk, args.method, args.threads, bar)
-        finally:
-            bar.close()
-        query = time.perf_counter() - query_start
-        output.commit()
+            try:
+                if client is None:
+                    nan = run_local(mesh, points, output, args.chunk, args.method, args.threads, bar)
+                else:
+                    nan = run_dask(client, mesh, points, output, args.chunk, args.method, args.threads, bar)
+            finally:
+                bar.close()
+            query = time.perf_counter() - query_start
+            output.commit()
+        except OutputError as exc:
+            print(f"{NAME}: error: {exc}", file=sys.stderr)
+            return 2
         output = None
         if nan:
             print(
@@ -465,7 +592,14 @@ def main(argv=None):
                 "nan_rows": nan,
                 "peak_rss_bytes": {"main": peak_rss(), "workers": workers},
             }
-            Path(args.summary).write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+            try:
+                Path(args.summary).write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+            except OSError as exc:
+                print(
+                    f"{NAME}: error: cannot write --summary {args.summary!r}: {exc.strerror or exc}",
+                    file=sys.stderr,
+                )
+                return 2
         return 0
     except KeyboardInterrupt:
         print(f"{NAME}: interrupted; no output written", file=sys.stderr)

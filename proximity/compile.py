@@ -1,7 +1,7 @@
 """Compile every kernel ahead of time: ``python -m proximity.compile``.
 
 A query compiles the kernels it uses at its first call and keeps them in
-the disk cache (see :mod:`proximity._jit`).  Containers and CI images that
+the disk cache (see :mod:`proximity._cache`).  Containers and CI images that
 should answer their first query at once run this command after installing,
 where the cache is writable, to compile every method of every shape and
 path.  It prints each kernel as it is done.
@@ -141,9 +141,9 @@ def main(argv=None):
         help="compile only this method (repeatable); default: every method",
     )
     args = parser.parse_args(argv)
-    from . import _jit
+    from . import _cache
 
-    if not _jit.CACHE:
+    if not _cache.CACHE:
         print("no writable cache directory: compiled kernels cannot be kept", file=sys.stderr)
         return 1
     start = time.perf_counter()

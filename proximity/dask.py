@@ -30,15 +30,15 @@ Dask is imported when a function is called: ``pip install
 
 import collections
 import dataclasses
+import operator
 import os
 
 import numpy as np
 
-from . import _threads
-from .mesh import TriangleMesh
+from . import _threads, primitives
+from ._validate import as_array
 from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult
-from .scene import Scene
-from .shapes import DEFAULT_METHOD, Circle, Disk, Frozen, Triangle, check_method
+from .shapes import DEFAULT_METHOD, Frozen, check_method
 
 __all__ = ["closest_point", "distance", "records"]
 
@@ -47,42 +47,41 @@ INSTALL = "pip install 'proximity3d[scale]'"
 #: Rows per chunk when ``points`` is a NumPy array: 24 MB of float64 points.
 CHUNK_ROWS = 1_000_000
 
-# The result type of each kind of shape (subclasses first).
-_RESULTS = ((TriangleMesh, MeshResult), (Scene, SceneResult), (Triangle, TriangleResult),
-            (Circle, CircleResult), (Disk, DiskResult))  # fmt: skip
-
 _INT64 = ("face", "primitive", "source")
 
 
 def _result_type(shape):
-    for kind, result in _RESULTS:
-        if isinstance(shape, kind):
-            return result
-    raise TypeError(
-        "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
-        f"got {type(shape).__name__}"
-    )
+    result = getattr(shape, "result_type", None)
+    if result is None:
+        raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
+    return result
 
 
 def _field_dtype(name, dim):
     if name == "point":
         return np.dtype((np.float64, (dim,)))
-    if name == "barycentric":
-        return np.dtype((np.float64, (3,)))
     if name == "feature":
         return np.dtype(np.int8)
-    if name == "equidistant":
-        return np.dtype(np.bool_)
     if name in _INT64:
         return np.dtype(np.int64)
+    for primitive in primitives.BY_CODE:
+        for extra, width in primitive.extra:
+            if extra == name and width == 0:
+                return np.dtype(np.bool_)
+            if extra == name and width > 1:
+                return np.dtype((np.float64, (width,)))
     return np.dtype(np.float64)
 
 
 def _arrays_type(result):
-    names = tuple(f.name for f in dataclasses.fields(result))
-    arrays = collections.namedtuple(result.__name__.replace("Result", "Arrays"), names)
-    arrays.__doc__ = f"The fields of a {result.__name__}, each a dask array."
-    arrays.__module__ = __name__
+    """The namedtuple of ``result``'s fields as dask arrays, a global of this module (so that it pickles)."""
+    name = result.__name__.replace("Result", "Arrays")
+    arrays = globals().get(name)
+    if arrays is None:
+        names = tuple(f.name for f in dataclasses.fields(result))
+        arrays = collections.namedtuple(name, names, module=__name__)
+        arrays.__doc__ = f"The fields of a {result.__name__}, each a dask array."
+        globals()[name] = arrays
     return arrays
 
 
@@ -91,8 +90,6 @@ DiskArrays = _arrays_type(DiskResult)
 CircleArrays = _arrays_type(CircleResult)
 MeshArrays = _arrays_type(MeshResult)
 SceneArrays = _arrays_type(SceneResult)
-_ARRAYS = {TriangleResult: TriangleArrays, DiskResult: DiskArrays, CircleResult: CircleArrays,
-           MeshResult: MeshArrays, SceneResult: SceneArrays}  # fmt: skip
 
 
 def _dask():
@@ -198,7 +195,7 @@ def _points(dask, shape, points):
     """``points`` as a dask array ``(N, D)`` with the columns in one chunk."""
     da = dask.array
     if not isinstance(points, da.Array):
-        points = np.asarray(points)
+        points = as_array(points, "points", f"(N, {shape.dim})")
         points = da.from_array(points, chunks=(CHUNK_ROWS, -1)) if points.ndim == 2 else points
     if points.ndim != 2 or points.shape[1] != shape.dim:
         raise ValueError(f"points must have shape (N, {shape.dim}); got shape {points.shape}")
@@ -210,14 +207,22 @@ def _points(dask, shape, points):
 
 
 def _check(shape, threads):
+    """``threads`` as an int (or None), once ``shape`` and ``threads`` are known to be valid."""
     _result_type(shape)
     if shape.batch_shape != ():
         raise ValueError(
-            f"proximity.dask takes a single shape (batch_shape ()); got a {type(shape).__name__} of "
-            f"batch_shape {shape.batch_shape}: gather many primitives in a TriangleMesh or a Scene"
+            f"shape must be a single shape (batch_shape ()) in proximity.dask; got a {type(shape).__name__} "
+            f"of batch_shape {shape.batch_shape}: gather many primitives in a TriangleMesh or a Scene"
         )
-    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
+    if threads is None:
+        return None
+    try:
+        count = operator.index(threads)  # any integer, Python's or NumPy's
+    except TypeError:
+        count = None
+    if count is None or isinstance(threads, bool) or count < 1:
         raise ValueError(f"threads must be a positive int or None; got {threads!r}")
+    return count
 
 
 def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
@@ -225,7 +230,8 @@ def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
 
     Parameters
     ----------
-    shape : Triangle, Circle, Disk, TriangleMesh or Scene
+    shape : Shape
+        Any shape of the package (a batch, a mesh, a scene, a rounded shape).
         A single shape (``batch_shape == ()``).
     points : dask.array.Array, shape ``(N, D)``
         Chunked by rows; columns are brought into one chunk.  A NumPy array
@@ -252,7 +258,7 @@ def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
     (((2, 1),), [2.0, 2.0, 1.0])
     """
     dask = _dask()
-    _check(shape, threads)
+    threads = _check(shape, threads)
     check_method(method, shape.methods)
     points = _points(dask, shape, points)
     shipped, per_host = _shipped(dask, shape)
@@ -292,12 +298,16 @@ def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
     (('distance', 'point'), [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
     """
     dask = _dask()
-    _check(shape, threads)
+    threads = _check(shape, threads)
     check_method(method, shape.methods)
     names = [f.name for f in dataclasses.fields(_result_type(shape))]
     if fields is not None:
-        fields = [fields] if isinstance(fields, str) else list(fields)
-        unknown = [name for name in fields if name not in names]
+        try:
+            fields = [fields] if isinstance(fields, str) else list(fields)
+        except TypeError:
+            kind = type(fields).__name__
+            raise TypeError(f"fields must be a str or a sequence of str; got {kind}") from None
+        unknown = [name for name in fields if not isinstance(name, str) or name not in names]
         if unknown or not fields:
             raise ValueError(f"fields must be names among {names}; got {fields}")
         names = fields
@@ -323,7 +333,8 @@ def closest_point(shape, points, *, method=DEFAULT_METHOD, threads=None):
 
     Parameters
     ----------
-    shape : Triangle, Circle, Disk, TriangleMesh or Scene
+    shape : Shape
+        Any shape of the package (a batch, a mesh, a scene, a rounded shape).
         A single shape (``batch_shape == ()``).
     points : dask.array.Array, shape ``(N, D)``
         Chunked by rows, as in :func:`distance`.
@@ -354,4 +365,4 @@ def closest_point(shape, points, *, method=DEFAULT_METHOD, threads=None):
     ([1.0, 1.0], [[0.25, 0.75, 0.0], [1.0, 0.5, 0.0]], [1, 0])
     """
     table = records(shape, points, method=method, threads=threads)
-    return _ARRAYS[_result_type(shape)](*(table[name] for name in table.dtype.names))
+    return _arrays_type(_result_type(shape))(*(table[name] for name in table.dtype.names))

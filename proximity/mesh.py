@@ -12,8 +12,9 @@ every face, and why that never changes the answer, is in
 
 import numpy as np
 
+from . import _lazy
 from ._collection import Collection
-from ._validate import as_float64, freeze_result, frozen, frozen_float64, require_finite
+from ._validate import as_array, as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .primitives import TRIANGLE
 from .results import MeshResult, format_repr
 from .shapes import DEFAULT_METHOD, keyword_only
@@ -68,6 +69,7 @@ class TriangleMesh(Collection):
 
     __slots__ = ("vertices", "faces", "broad_phase", "_tree", "_signs")
     methods = TRIANGLE.methods
+    result_type = MeshResult
 
     def __init__(self, vertices, faces=None, *, broad_phase="auto"):
         if faces is None:
@@ -81,7 +83,7 @@ class TriangleMesh(Collection):
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must have shape (V, 3); got shape {v.shape}")
         require_finite(v, "vertices")
-        f = np.asarray(faces)
+        f = as_array(faces, "faces", "(F, 3)")
         if f.dtype.kind not in "iu":
             raise ValueError(f"faces must be an integer array of shape (F, 3); got dtype {f.dtype}")
         if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] == 0:
@@ -233,8 +235,7 @@ class TriangleMesh(Collection):
         """``(output shape, distances (n,), inside (n,))`` for :meth:`signed_distance`."""
         if sign not in SIGNS:
             raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
-        from . import _signed
-
+        _signed = _lazy.load("proximity._signed")
         signs = None
         if sign == "pseudonormal":
             signs = self._signs
@@ -278,6 +279,5 @@ class TriangleMesh(Collection):
 
 def _primitives(vertices, faces):
     """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
-    from . import broadphase
-
+    broadphase = _lazy.load("proximity.broadphase")
     return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces)

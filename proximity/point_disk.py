@@ -555,3 +555,11 @@ def round_frames(center, normal, radius, unit):
         length = math.sqrt(x * x + y * y + z * z)
         unit[i, 0], unit[i, 1], unit[i, 2] = x / length, y / length, z / length
     return bad
+
+
+def exact_sqr_bounds(code, params, point):
+    """``bits -> (lo2, hi2)``: bounds on the exact squared distance of stored
+    row ``params`` (center, unit normal, normal as given, radius), to
+    ``2^-bits`` of it."""
+    is_disk = code == DISK.code
+    return lambda bits: _exact.round_sqr_bounds(is_disk, params[0:3], params[6:9], params[9], point, bits)

@@ -256,3 +256,9 @@ def resolve(code, params, point):
     """The certified answers of stored rows ``params`` to ``point``, as arrays."""
     r = query(CERTIFIED, params[:, :3].reshape(-1, 1, 3), point, (len(params),), True)
     return dict(r, extra=np.full((len(params), 3), np.nan), flag=np.zeros(len(params), np.bool_))
+
+
+def exact_sqr_bounds(code, params, point):
+    """``bits -> (lo2, hi2)``: the exact squared distance of stored row ``params`` (exact: equal bounds)."""
+    s = _exact.hull_sqr_distance(params[:3].reshape(1, 3), point)
+    return lambda bits: (s, s)

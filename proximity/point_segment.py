@@ -473,3 +473,9 @@ def resolve(code, params, point):
     nan = np.full(len(params), np.nan)
     extra = np.stack([r["parameter"], nan, nan], axis=1)
     return dict(r, extra=extra, flag=np.zeros(len(params), np.bool_))
+
+
+def exact_sqr_bounds(code, params, point):
+    """``bits -> (lo2, hi2)``: the exact squared distance of stored row ``params`` (exact: equal bounds)."""
+    s = _exact.hull_sqr_distance(params[:6].reshape(2, 3), point)
+    return lambda bits: (s, s)

@@ -728,3 +728,9 @@ def exact(vertices, point):
 def query(method, vertices, points, out_shape, full):
     """Run the batch kernel of ``method``; inputs are validated float64 3D arrays."""
     return run(LAYOUT, sys.modules[__name__], method, (), (vertices,), points, out_shape, full)
+
+
+def exact_sqr_bounds(code, params, point):
+    """``bits -> (lo2, hi2)``: the exact squared distance of stored row ``params`` (exact: equal bounds)."""
+    s = _exact.hull_sqr_distance(params[:9].reshape(3, 3), point)
+    return lambda bits: (s, s)

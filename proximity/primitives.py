@@ -27,12 +27,25 @@ use, provides for every method:
     The certified answers of rows, exact fallback included, as arrays.
 """
 
-import importlib
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BY_CODE", "CIRCLE", "DISK", "REGISTRY", "SEGMENT", "TRIANGLE", "Primitive", "vertex_counts"]
+from . import _lazy
+
+__all__ = [
+    "BY_CODE",
+    "CIRCLE",
+    "DISK",
+    "POINT",
+    "REGISTRY",
+    "SEGMENT",
+    "TRIANGLE",
+    "Primitive",
+    "offering",
+    "present",
+    "vertex_counts",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +70,9 @@ class Primitive:
         row's answer, with their widths; a width of 0 is the boolean flag.
     methods : tuple of str
         The methods it offers.
+    axis : int or None
+        The first of the three parameters that hold its unit normal, for a
+        primitive with an axis (disks and circles), else None.
 
     Examples
     --------
@@ -73,23 +89,28 @@ class Primitive:
     module: str
     extra: tuple
     methods: tuple = ("robust", "certified", "eberly")
+    axis: int | None = None
 
     @property
     def kernels(self):
-        """Its kernel module (importing it loads the compiler)."""
-        return importlib.import_module(f"proximity.{self.module}")
+        """Its kernel module (importing it loads the compiler, under
+        :func:`proximity._lazy.load`'s lock)."""
+        return _lazy.load(f"proximity.{self.module}")
 
     def __repr__(self):
         return f"Primitive({self.name!r})"
 
 
 TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),))
-DISK = Primitive("disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)))
-CIRCLE = Primitive("circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)))
+DISK = Primitive("disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)), axis=3)
+CIRCLE = Primitive(
+    "circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)), axis=3
+)
 SEGMENT = Primitive("segment", 3, 6, 2, "point_segment", (("parameter", 1),), ("robust", "certified"))
+POINT = Primitive("point", 4, 3, 1, "point_point", (), ("robust", "certified"))
 
 #: Every primitive, by name, in code order.
-REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE, SEGMENT)}
+REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE, SEGMENT, POINT)}
 
 #: Every primitive, indexed by its code.
 BY_CODE = tuple(sorted(REGISTRY.values(), key=lambda p: p.code))

@@ -163,6 +163,19 @@ class TriangleResult(Result):
 
 
 @dataclass(frozen=True, repr=False)
+class PointResult(Result):
+    """Closest point on a point: the point itself, feature ``VERTEX0``.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> r = proximity.Point([1, 2, 3]).closest_point([1, 2, 5])
+    >>> float(r.distance), r.point.tolist(), str(r.feature_name)
+    (2.0, [1.0, 2.0, 3.0], 'VERTEX0')
+    """
+
+
+@dataclass(frozen=True, repr=False)
 class SegmentResult(Result):
     """Closest point on a segment.
 
@@ -332,6 +345,17 @@ def triangle_from_row(row):
     fields["point"] = row[_POINT]
     fields["feature"] = _FEATURES[row.item(5)]
     fields["barycentric"] = row[_LAST3]
+    return result
+
+
+def point_from_row(row):
+    """:class:`PointResult` of one fast-path query."""
+    result = _new(PointResult)
+    fields = result.__dict__
+    fields["distance"] = row[0]
+    fields["sqr_distance"] = row[1]
+    fields["point"] = row[_POINT]
+    fields["feature"] = _FEATURES[row.item(5)]
     return result
 
 

@@ -19,7 +19,7 @@ from ._validate import frozen
 from .results import SceneResult
 
 # The shapes a scene takes, for the messages.
-_NAMES = "Triangle, Disk, Circle or TriangleMesh"
+_NAMES = "proximity shape (Triangle, Segment, Point, Disk, Circle, TriangleMesh, Scene or a rounded one)"
 
 __all__ = ["BRUTE_FORCE_MAX", "Scene"]
 
@@ -71,6 +71,7 @@ class Scene(Collection):
     """
 
     __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds")
+    result_type = SceneResult
 
     def __init__(self, shapes, *, broad_phase="auto"):
         if not isinstance(shapes, (list, tuple)):
@@ -104,6 +105,11 @@ class Scene(Collection):
         if len(self.shapes) > 4:
             shapes += f", ... ({len(self.shapes) - 4} more)"
         return f"Scene([{shapes}], broad_phase={self.broad_phase!r})"
+
+    def _rows(self):
+        """``(kinds, params)`` of every primitive, in order, as a collection stores them."""
+        kinds, params, _, _ = _primitives(self.shapes)
+        return kinds, params
 
     def _primitives(self, index):
         """``(kinds, params)`` of primitives ``index``, as the tree stores them."""
@@ -147,18 +153,24 @@ def _primitives(shapes):
     """``(kinds, params, counts, methods)``: every primitive of ``shapes`` in
     order, as the broad phase stores them, the number from each shape, and
     the methods they all offer."""
-    kinds, params, counts = [], [], []
+    kinds, params, radii, counts = [], [], [], []
     methods = None
     for j, shape in enumerate(shapes):
         rows = getattr(shape, "_rows", None)
         if rows is None:
             raise TypeError(f"shapes[{j}] must be a {_NAMES}; got {type(shape).__name__}")
-        kind, p = rows()
+        rows = rows()
+        kind, p = rows[:2]
         if len(kind):
             methods = shape.methods if methods is None else tuple(m for m in methods if m in shape.methods)
         kinds.append(kind)
         params.append(p)
+        radii.append(rows[2] if len(rows) == 3 else np.zeros(len(kind)))
         counts.append(len(kind))
     if not counts:
         return np.zeros(0, np.int8), np.zeros((0, primitives.N_PARAMS)), counts, methods
-    return np.concatenate(kinds), np.concatenate(params), counts, methods
+    params, radii = np.concatenate(params), np.concatenate(radii)
+    if radii.any():
+        # Rounded primitives: each row's radius in one more column (see proximity.broadphase).
+        params = np.concatenate([params, radii[:, None]], axis=1)
+    return np.concatenate(kinds), params, counts, methods

@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import _counts, _pool, _threads
+from . import _counts, _lazy, _pool, _threads
 from ._validate import (
     as_float64,
     broadcast_batch,
@@ -21,16 +21,18 @@ from ._validate import (
     require_finite,
 )
 from .methods import DEFAULT, REGISTRY, resolve
-from .primitives import CIRCLE, DISK, N_PARAMS, SEGMENT, TRIANGLE
+from .primitives import CIRCLE, DISK, N_PARAMS, POINT, SEGMENT, TRIANGLE
 from .results import (
     CircleResult,
     DiskResult,
+    PointResult,
     Result,
     SegmentResult,
     TriangleResult,
     circle_from_row,
     disk_from_row,
     format_repr,
+    point_from_row,
     segment_from_row,
     triangle_from_row,
 )
@@ -168,13 +170,51 @@ class _Facade(Frozen):
 
     __slots__ = ()
 
-    @property
-    def methods(self):
-        """The values ``method`` accepts: those of the kind of primitive."""
-        return self._primitive.methods
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        # ``methods``: the values ``method`` accepts, the primitive's;
+        # ``result_type``: the class of ``closest_point``'s results.
+        if "_primitive" in cls.__dict__:
+            cls.methods = cls._primitive.methods
+        if "_result" in cls.__dict__:
+            cls.result_type = cls._result
 
     def _kernels(self):
         return self._primitive.kernels
+
+    def __getitem__(self, index):
+        """The shapes at ``index`` of the batch: a shape of the same kind.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> disks = proximity.Disk([[0, 0, 0], [0, 0, 5]], [0, 0, 1], [1.0, 2.0])
+        >>> disks[1]
+        Disk(center=array([0., 0., 5.]), normal=array([0., 0., 1.]), radius=array(2.))
+        """
+        if self.batch_shape == ():
+            raise IndexError(f"a single {type(self).__name__} has no batch to index")
+        args = []
+        for name, core in self._fields:
+            array = getattr(self, name)
+            args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
+        return type(self)(*args)
+
+    def inflated(self, radius):
+        """The points within ``radius`` of the shape: a rounded solid
+        (:class:`proximity.Inflated`), ``radius`` broadcasting with the batch.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        >>> slab = tri.inflated(0.25)
+        >>> slab.distance([[0.2, 0.2, 1.0], [0.2, 0.2, 0.1]]).tolist()
+        [0.75, 0.0]
+        """
+        from .inflated import Inflated
+
+        return Inflated(self, radius)
 
     def _prepare(self, points, method):
         method = check_method(method, self.methods)
@@ -224,8 +264,7 @@ class _Facade(Frozen):
 
     def _compile_single(self, method):
         """The one-query kernel of ``method``, as an entry point that skips Numba's dispatch."""
-        from ._loops import single_entry  # loads the compiler, as the kernels do
-
+        single_entry = _lazy.load("proximity._loops").single_entry  # loads the compiler, as the kernels do
         return single_entry(self._kernels().single_kernel(method)), method.exact_fallback
 
     def _certified_row(self, row, point):
@@ -287,7 +326,7 @@ class _Hull(_Facade):
     __slots__ = ("vertices", "batch_shape", "dim", "_vertices3", "_args")
     _derived = ("_vertices3", "_args")
     _corners = 3
-    _argument = "vertices"
+    _fields = (("vertices", 2),)  # the constructor's arrays, and their core dimensions
 
     def __init__(self, vertices, *, copy=False):
         n = self._corners
@@ -393,9 +432,54 @@ class Segment(_Hull):
     _entries = {}
 
 
+class Point(_Hull):
+    """A batch of points in 2D or 3D: the core of a :class:`~proximity.Sphere`.
+
+    Parameters
+    ----------
+    position : array_like, shape ``batch + (D,)``
+        Finite coordinates, D = 2 or 3.
+    copy : bool, keyword-only, default False
+        As for :class:`Triangle`.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> p = proximity.Point([[0, 0, 0], [3, 0, 0]])
+    >>> p.distance([0, 4, 0]).tolist()
+    [4.0, 5.0]
+    """
+
+    __slots__ = ()
+    _primitive = POINT
+    _corners = 1
+    _fields = (("position", 1),)
+    _result = PointResult
+    _from_row = staticmethod(point_from_row)
+    _entries = {}
+
+    def __init__(self, position, *, copy=False):
+        expected = "(..., D) with D = 2 or 3"
+        p = frozen_float64(position, "position", expected, copy)
+        if p.ndim < 1 or p.shape[-1] not in (2, 3):
+            raise ValueError(f"position must have shape {expected}; got shape {p.shape}")
+        require_finite(p, "position")
+        self._init(vertices=p[..., None, :], batch_shape=p.shape[:-1], dim=p.shape[-1])
+        self._init(**self._derive())
+
+    @property
+    def position(self):
+        """The points, ``batch + (D,)``, read-only."""
+        return self.vertices[..., 0, :]
+
+    def __repr__(self):
+        return format_repr(self, ("position",))
+
+
 class _Round(_Facade):
     __slots__ = ("center", "normal", "radius", "batch_shape", "_unit_normal", "_args")
     _derived = ("_args",)
+    _fields = (("center", 1), ("normal", 1), ("radius", 0))
     dim = 3
     _is_disk = False
 
@@ -544,8 +628,7 @@ def _unit_normals(center, normal, radius):
     the first argument with a non-finite entry, a negative radius or a zero
     normal."""
     if normal.size >= 3 * _COMPILED_UNIT:
-        from .point_disk import round_frames
-
+        round_frames = _lazy.load("proximity.point_disk").round_frames
         unit = _pool.empty(normal.shape)
         rows = normal.size // 3
         c = center.reshape(-1, 3) if center.size == normal.size else _NO_ROWS[:, :3]

@@ -21,6 +21,7 @@ import weakref
 
 import numpy as np
 
+from ._validate import as_array
 from .mesh import TriangleMesh
 
 #: Meshes built from ``trimesh.Trimesh`` objects, kept so that repeated calls
@@ -62,6 +63,15 @@ def _mesh(mesh):
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = (ref, version, built)
     return built
+
+
+def _points(points):
+    """``points`` as a float64 array ``(n, 3)``: converted as trimesh does
+    (``np.asarray(points, dtype=np.float64)``), with errors that name them."""
+    points = as_array(points, "points", "(n, 3)", dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must be (n, 3); got shape {points.shape}")
+    return points
 
 
 def closest_point(mesh, points):
@@ -111,9 +121,7 @@ def closest_point(mesh, points):
     >>> closest.round(6).tolist(), distance.round(6).tolist(), triangle_id.tolist()
     ([[0.333333, 0.333333, 0.333333], [0.0, 0.2, 0.3]], [1.154701, 1.0], [3, 2])
     """
-    points = np.asarray(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3:
-        raise ValueError(f"points must be (n, 3); got shape {points.shape}")
+    points = _points(points)
     r = _mesh(mesh).closest_point(points)
     return np.array(r.point), np.array(r.distance), np.array(r.face)
 
@@ -160,9 +168,7 @@ def signed_distance(mesh, points):
     >>> signed_distance((vertices, faces), [[0.1, 0.2, 0.2], [-1, 0.2, 0.3], [0, 0, 0]]).round(6).tolist()
     [0.1, -1.0, 0.0]
     """
-    points = np.asarray(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3:
-        raise ValueError(f"points must be (n, 3); got shape {points.shape}")
+    points = _points(points)
     return -np.asarray(_mesh(mesh).signed_distance(points)) + 0.0
 
 
@@ -213,9 +219,7 @@ class ProximityQuery:
         (trimesh's k-d tree breaks them its own way).  Vertices that no
         face uses count, as in trimesh.
         """
-        points = np.asarray(points, dtype=np.float64)
-        if points.ndim != 2 or points.shape[1] != 3:
-            raise ValueError(f"points must be (n, 3); got shape {points.shape}")
+        points = _points(points)
         mesh = _mesh(self._source)
         if self._vertices is None or self._vertices[0] is not mesh:
             index = np.arange(len(mesh.vertices))

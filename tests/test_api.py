@@ -378,7 +378,10 @@ def test_threads_sets_numbas_threads_for_the_block_and_restores_them():
     with proximity.threads() as n:
         assert n == numba.config.NUMBA_NUM_THREADS == numba.get_num_threads()
     assert (one == tri.distance(points)).all()
-    for bad, error in ((0, ValueError), (numba.config.NUMBA_NUM_THREADS + 1, ValueError), (1.0, TypeError)):
+    with proximity.threads(np.int64(1)) as n:  # any integer
+        assert n == 1 and type(n) is int and numba.get_num_threads() == 1
+    bad_values = [(0, ValueError), (numba.config.NUMBA_NUM_THREADS + 1, ValueError), (1.0, TypeError)]
+    for bad, error in bad_values + [(True, TypeError), (np.True_, TypeError), (np.float64(1), TypeError)]:
         with pytest.raises(error, match="^n must be"):
             with proximity.threads(bad):
                 pass

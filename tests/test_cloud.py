@@ -209,6 +209,166 @@ def test_bad_output_and_options(files, tmp_path, capsys):
         assert stop.value.code == 2
 
 
+# --- Damaged input, an input as OUT, outputs that cannot be written ------------------------------
+
+
+def _ascii_ply(path, rows, declared):
+    header = f"ply\nformat ascii 1.0\nelement vertex {declared}\n"
+    header += "".join(f"property double {axis}\n" for axis in "xyz") + "end_header\n"
+    path.write_text(header + "".join(" ".join(repr(float(x)) for x in row) + "\n" for row in rows))
+
+
+def test_an_ascii_ply_that_ends_early_is_refused(files, tmp_path, capsys):
+    rows = files["points"][:4]  # finite
+    whole, cut = tmp_path / "whole.ply", tmp_path / "cut.ply"
+    _ascii_ply(whole, rows, 4)
+    _ascii_ply(cut, rows[:3], 4)  # the header's count, but a row short
+    out = tmp_path / "d.npy"
+    assert _run(files["stl"], whole, "-o", out) == 0
+    assert np.load(out).tobytes() == _expected(files["stl"], rows).distance.tobytes()
+    out.unlink()
+    capsys.readouterr()
+    assert _run(files["stl"], cut, "-o", out) == 2
+    assert capsys.readouterr().err == (
+        f"proximity.cloud: error: POINTS {str(cut)!r} declares 4 vertices but holds 3 (a truncated file?)\n"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.ply", "whole.ply"]
+
+
+def test_missing_zarr_chunks_are_named(files, tmp_path, capsys):
+    zarr = pytest.importorskip("zarr")
+    source = tmp_path / "points.zarr"
+    z = zarr.open_array(str(source), mode="w", shape=(N, 3), chunks=(4096, 3), dtype="f8")
+    z[:] = files["points"]
+    (source / z.metadata.encode_chunk_key((1, 0))).unlink()  # rows 4096 to 8191, as a copy cut short
+    out = tmp_path / "d.npy"
+    assert _run(files["stl"], source, "-o", out) == 0
+    assert capsys.readouterr().err.splitlines()[0] == (
+        f"proximity.cloud: warning: 1 of 5 chunks of POINTS {str(source)!r} are missing from its store: "
+        "their rows read as its fill value (0.0)"
+    )
+    read = files["points"].copy()
+    read[4096:8192] = 0.0
+    assert np.load(out).tobytes() == _expected(files["stl"], read).distance.tobytes()
+
+
+def test_an_out_that_is_an_input_is_refused_and_the_input_kept(files, tmp_path, capsys):
+    points = tmp_path / "p.npy"
+    np.save(points, files["points"])
+    original = points.read_bytes()
+    (tmp_path / "link.npy").symlink_to(points)
+    os.link(points, tmp_path / "hard.npy")
+    (tmp_path / "here").symlink_to(tmp_path, target_is_directory=True)
+    group = tmp_path / "group.zarr"
+    group.mkdir()
+    np.save(group / "q.npy", files["points"])
+    names = sorted(p.name for p in tmp_path.iterdir())
+    cases = [  # (POINTS, OUT, other arguments)
+        ("p.npy", "p.npy", []),  # the same name
+        ("p.npy", "link.npy", []),  # a symbolic link to POINTS
+        ("link.npy", "p.npy", []),  # POINTS a link to OUT
+        ("p.npy", "hard.npy", []),  # a hard link
+        ("p.npy", "here/p.npy", []),  # through a linked directory
+        ("group.zarr/q.npy", "group.zarr", []),  # a directory that holds POINTS
+        ("p.npy", "d.npy", ["--summary", tmp_path / "here" / "p.npy"]),
+    ]
+    for source, out, more in cases:
+        assert _run(files["stl"], tmp_path / source, "-o", tmp_path / out, *more) == 2, (source, out)
+        err = capsys.readouterr().err
+        clash = "holds" if out == "group.zarr" else "is"
+        what = "" if out == "group.zarr" else " (the same file)"
+        assert err.startswith("proximity.cloud: error: ") and err.endswith(
+            f"{clash} POINTS {str(tmp_path / source)!r}{what}: writing it would replace the input\n"
+        ), err
+        assert points.read_bytes() == original
+        assert sorted(p.name for p in tmp_path.iterdir()) == names
+
+
+def test_an_input_as_out_s_partial_file_is_refused(files, tmp_path, capsys):
+    zarr = pytest.importorskip("zarr")
+    source = tmp_path / "d.npy.partial"  # a zarr array, which OUT d.npy would remove
+    zarr.open_array(str(source), mode="w", shape=(N, 3), chunks=(4096, 3), dtype="f8")[:] = files["points"]
+    assert _run(files["stl"], source, "-o", tmp_path / "d.npy") == 2
+    assert "OUT's partial file" in capsys.readouterr().err
+    assert zarr.open_array(str(source), mode="r")[:].tobytes() == files["points"].tobytes()
+
+
+def _listing(directory):
+    return sorted(p.name for p in directory.iterdir())
+
+
+def test_an_out_that_is_a_directory(files, tmp_path, capsys):
+    (tmp_path / "d.npy").mkdir()
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy") == 2
+    assert (
+        capsys.readouterr().err == f"proximity.cloud: error: OUT {str(tmp_path / 'd.npy')!r} is a directory\n"
+    )
+    assert _listing(tmp_path) == ["d.npy"] and _listing(tmp_path / "d.npy") == []
+
+
+def test_a_read_only_directory(files, tmp_path, tmpfs, capsys):
+    if os.geteuid() == 0:  # root writes through permissions: a read-only filesystem
+        directory = tmpfs(1 << 20, read_only=True)
+    else:
+        directory = tmp_path / "read-only"
+        directory.mkdir(mode=0o555)
+    for name in ("d.npy", "d.zarr"):
+        assert _run(files["stl"], files["npy"], "-o", directory / name) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"proximity.cloud: error: cannot write OUT {str(directory / name)!r}: "), err
+        assert err.count("\n") == 1
+        assert _listing(directory) == []
+
+
+@pytest.mark.parametrize("out", ["d.npy", "r.npy", "d.zarr"])
+def test_a_full_disk(files, tmpfs, capsys, out):
+    disk = tmpfs(256 << 10, free=0)
+    args = ["--closest-points", "--faces"] if out == "r.npy" else []  # records
+    assert _run(files["stl"], files["npy"], "-o", disk / out, *args) == 2
+    assert capsys.readouterr().err == (
+        f"proximity.cloud: error: cannot write OUT {str(disk / out)!r}: No space left on device\n"
+    )
+    assert _listing(disk) == ["filler0"]
+
+
+@pytest.mark.parametrize("out, allocate", [("d.npy", True), ("d.npy", False), ("d.zarr", False)])
+def test_a_disk_too_small_for_the_output(files, tmpfs, out, allocate):
+    """Room for about a third of the distances: an ``.npy`` output is
+    allocated up front and fails before the queries; without the allocation
+    (a filesystem that does not support it) or as zarr chunks, the write of
+    a later chunk fails.  In a new process: a write through a memory map
+    kills it (SIGBUS)."""
+    disk = tmpfs(1 << 20, free=N * 8 // 3)
+    code = textwrap.dedent(
+        f"""
+        import os, sys
+        from proximity import cloud
+        if not {allocate} and hasattr(os, "posix_fallocate"):
+            del os.posix_fallocate
+        query, calls = cloud._query, []
+        def counted(*args):
+            calls.append(1)
+            return query(*args)
+        cloud._query = counted
+        code = cloud.main({[str(files["stl"]), str(files["npy"]), "-o", str(disk / out), "--chunk", CHUNK]!r})
+        print(len(calls))
+        sys.exit(code)
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert (
+        done.stderr
+        == f"proximity.cloud: error: cannot write OUT {str(disk / out)!r}: No space left on device\n"
+    )
+    assert _listing(disk) == ["filler0"]
+    calls = int(done.stdout)
+    if allocate and hasattr(os, "posix_fallocate"):
+        assert calls == 0
+    else:
+        assert 1 < calls < N // int(CHUNK) + 1
+
+
 # --- A job that stops midway ---------------------------------------------------------------------
 
 

@@ -1,45 +1,48 @@
-"""The query contract, over every shape and method: shapes, dtypes, errors."""
+"""The query contract, over every kind of primitive and method: shapes, dtypes, errors.
+
+The kinds come from the primitive registry (:mod:`proximity.primitives`),
+their shapes from :mod:`proximity.testing.examples`: a new primitive is
+covered here without naming it.
+"""
 
 import numpy as np
 import pytest
 
 import proximity
-from proximity import Circle, Disk, Feature, Triangle
-from proximity import shapes as shapes_module
-from proximity.testing import scenes
+from proximity import Feature, primitives
+from proximity.testing import examples
 
-TRI = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+KINDS = [name if dim == 3 else f"{name}{dim}d" for name, dim in examples.kinds()]
 
 
 def make(kind, batch=()):
-    """A shape of ``kind`` with batch shape ``batch``, all members distinct."""
-    count = int(np.prod(batch, dtype=int))
-    offsets = np.arange(count, dtype=float).reshape(batch + (1,))
-    if kind == "triangle":
-        return Triangle(np.asarray(TRI) + offsets[..., None])
-    if kind == "triangle2d":
-        return Triangle(np.asarray(TRI)[:, :2] + offsets[..., None])
-    cls = Circle if kind == "circle" else Disk
-    return cls(center=np.zeros(batch + (3,)) + offsets, normal=[0.0, 0.0, 1.0], radius=1.0 + offsets[..., 0])
+    """A shape of ``kind`` (a primitive's name, ``2d`` appended for 2D) with batch shape ``batch``."""
+    name, dim = (kind[:-2], 2) if kind.endswith("2d") else (kind, 3)
+    return examples.example(name, batch, dim)
 
 
-KINDS = ["triangle", "triangle2d", "circle", "disk"]
+def primitive(kind):
+    return primitives.REGISTRY[kind[:-2] if kind.endswith("2d") else kind]
+
+
+#: Every kind with every method it offers.
+KIND_METHODS = [
+    pytest.param(kind, method, id=f"{kind}-{method}") for kind in KINDS for method in primitive(kind).methods
+]
 QUERIES = [
     pytest.param(lambda s, p, **kw: proximity.closest_point(s, p, **kw).distance, id="closest_point"),
     pytest.param(lambda s, p, **kw: proximity.distance(s, p, **kw), id="distance"),
     pytest.param(lambda s, p, **kw: s.closest_point(p, **kw).distance, id="method.closest_point"),
     pytest.param(lambda s, p, **kw: s.distance(p, **kw), id="method.distance"),
 ]
-METHODS = ["robust", "eberly", "certified"]
 
 
 def points_for(shape, lead, seed=0):
     return np.random.default_rng(seed).normal(size=lead + (shape.dim,)) * 2.0
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("kind, method", KIND_METHODS)
 @pytest.mark.parametrize("query", QUERIES)
-@pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize(
     "shape_batch, point_lead, out",
     [
@@ -61,20 +64,8 @@ def test_broadcasting(kind, query, method, shape_batch, point_lead, out):
     s_full = np.broadcast_to(np.arange(int(np.prod(shape_batch, dtype=int))).reshape(shape_batch), out)
     p_full = np.broadcast_to(points, out + (shape.dim,))
     for index in np.ndindex(*out):
-        single = make_single(shape, np.unravel_index(s_full[index], shape_batch) if shape_batch else ())
+        single = shape[np.unravel_index(s_full[index], shape_batch)] if shape_batch else shape
         assert np.asarray(d)[index] == single.distance(p_full[index], method=method)
-
-
-def make_single(shape, index):
-    if isinstance(shape, Triangle):
-        return Triangle(shape.vertices[index])
-    b = np.broadcast_to
-    batch = shape.batch_shape
-    return type(shape)(
-        b(shape.center, batch + (3,))[index],
-        b(shape.normal, batch + (3,))[index],
-        b(shape.radius, batch)[index],
-    )
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -95,12 +86,13 @@ def test_result_fields_and_shapes(kind):
     assert r.distance.shape == r.sqr_distance.shape == r.feature.shape == (4,)
     assert r.point.shape == (4, shape.dim)
     assert r.distance.dtype == np.float64 and r.feature.dtype == np.int8
-    if isinstance(shape, Triangle):
-        assert r.barycentric.shape == (4, 3)
-        np.testing.assert_allclose(r.barycentric.sum(axis=-1), 1.0, rtol=0, atol=1e-15)
-    else:
-        assert r.height.shape == r.radial.shape == (4,)
-    assert hasattr(r, "equidistant") == (kind == "circle")
+    for name, width in primitive(kind).extra:
+        value = getattr(r, name)
+        assert value.shape == ((4, width) if width > 1 else (4,)), name
+        assert value.dtype == (np.bool_ if width == 0 else np.float64), name
+    extra = {name for name, _ in primitive(kind).extra}
+    common = {"distance", "sqr_distance", "point", "feature"}
+    assert set(vars(r)) == common | extra
     with pytest.raises(AttributeError):
         r.distance = 0
     with pytest.raises(ValueError):
@@ -114,15 +106,13 @@ def test_dtypes_convert_to_float64(kind, dtype):
     expected = shape.distance(np.ones(shape.dim))
     assert shape.distance(np.ones(shape.dim, dtype=dtype)).dtype == np.float64
     assert shape.distance(np.ones(shape.dim, dtype=dtype)) == expected
-    if kind == "triangle":
-        assert Triangle(np.asarray(TRI, dtype=dtype)).vertices.dtype == np.float64
-    if kind == "disk":
-        d = Disk(np.zeros(3, dtype), np.array([0, 0, 1], dtype), dtype(1))
-        assert d.center.dtype == d.normal.dtype == d.radius.dtype == np.float64
+    # The constructor converts every array it takes.
+    arrays = [np.asarray(getattr(shape, name)) for name, _ in shape._fields]
+    again = type(shape)(*(np.round(a).astype(dtype) for a in arrays))
+    assert all(getattr(again, name).dtype == np.float64 for name, _ in shape._fields)
 
 
-@pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind, method", KIND_METHODS)
 def test_non_finite_points_give_nan_rows_only(kind, method):
     shape = make(kind)
     points = points_for(shape, (4,))
@@ -137,53 +127,6 @@ def test_non_finite_points_give_nan_rows_only(kind, method):
     )
     assert (r.feature[1:] == Feature.NONE).all()
     assert np.isnan(shape.distance(points, method=method)[1:]).all()
-
-
-def test_shape_data_are_frozen():
-    vertices = np.array(TRI)
-    tri = Triangle(vertices)
-    with pytest.raises(ValueError):
-        tri.vertices[0, 0] = 1.0
-    with pytest.raises(AttributeError):
-        tri.vertices = vertices
-
-
-@pytest.mark.parametrize(
-    "build, match",
-    [
-        (
-            lambda: Triangle([[0, 0, 0], [1, 0, 0]]),
-            r"vertices must have shape \(\.\.\., 3, D\).*got shape \(2, 3\)",
-        ),
-        (lambda: Triangle(np.zeros((3, 4))), r"vertices must have shape .*got shape \(3, 4\)"),
-        (lambda: Triangle(np.zeros((3, 1))), r"vertices must have shape .*got shape \(3, 1\)"),
-        (lambda: Triangle(np.zeros(3)), r"vertices must have shape .*got shape \(3,\)"),
-        (
-            lambda: Triangle([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]]),
-            r"vertices must be finite; got nan at index \(1, 1\)",
-        ),
-        (lambda: Triangle([[0, 0, 0], [1, 0, 0], [0, np.inf, 0]]), r"vertices must be finite"),
-        (lambda: Triangle([["a", "b", "c"]] * 3), r"vertices must be a real numeric array"),
-        (lambda: Triangle(np.zeros((3, 3), complex)), r"vertices must be a real numeric array.*complex"),
-        (lambda: Triangle([[0, 0], [1, 0, 0], [0, 1]]), r"vertices must be an array of shape"),
-        (lambda: Circle([0, 0], [0, 0, 1], 1), r"center must have shape \(\.\.\., 3\); got shape \(2,\)"),
-        (
-            lambda: Circle([0, 0, 0], [0, 0, 0], 1),
-            r"normal must be non-zero; got a zero vector at index \(\)",
-        ),
-        (
-            lambda: Disk([0, 0, 0], [[0, 0, 1], [0, 0, 0]], 1),
-            r"normal must be non-zero; got a zero vector at index \(1,\)",
-        ),
-        (lambda: Disk([0, 0, 0], [0, 0, 1], -1.0), r"radius must be >= 0; got -1.0"),
-        (lambda: Disk([0, 0, 0], [0, 0, 1], np.nan), r"radius must be finite"),
-        (lambda: Circle([0, np.inf, 0], [0, 0, 1], 1), r"center must be finite"),
-        (lambda: Circle(np.zeros((2, 3)), np.ones((3, 3)), 1), r"center, normal and radius do not broadcast"),
-    ],
-)
-def test_bad_shape_data_raise_at_construction(build, match):
-    with pytest.raises(ValueError, match=match):
-        build()
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -219,14 +162,21 @@ def test_shapes_follow_the_protocol():
         assert isinstance(make(kind), proximity.Shape)
 
 
-@pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("kind", ["triangle", "circle", "disk"])
+KIND_METHODS_3D = [case for case in KIND_METHODS if not case.values[0].endswith("2d")]
+
+
+def _on_shape(shape):
+    """A point of the shape: the first vertex, or the center."""
+    return shape._rows()[1][0, : shape.dim]
+
+
+@pytest.mark.parametrize("kind, method", KIND_METHODS_3D)
 def test_single_point_fast_path_matches_the_batch_path(kind, method):
     """One point against one shape takes a separate path; its answers are the batch's."""
     shape = make(kind)
     points = points_for(shape, (50,), seed=3)
     points[7] = [np.nan, 0.0, 0.0]
-    points[8] = shape.vertices[1] if kind == "triangle" else shape.center
+    points[8] = _on_shape(shape)
     batch = shape.closest_point(points, method=method)
     for k, p in enumerate(points):
         strided = np.stack([p, p], axis=1)[:, 0]  # a non-contiguous view
@@ -255,81 +205,15 @@ def _points_against(center, scene_points, rng):
     return rng.permutation(points)
 
 
-@pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("family", scenes.TRIANGLE_FAMILIES, ids=lambda f: f.label)
-def test_one_triangle_takes_the_same_bits_as_pairs(family, method):
-    """A batch against one triangle has its own compiled loop; every field
-    matches the same triangle repeated, which takes the general loop."""
-    rng = np.random.default_rng(11)
-    scene = family(rng, 300)
-    points = _points_against(scene.vertices[0, 0], scene.points, rng)
-    one = Triangle(scene.vertices[0]).closest_point(points, method=method)
-    pairs = Triangle(np.repeat(scene.vertices[:1], len(points), axis=0)).closest_point(points, method=method)
-    for name, value in vars(pairs).items():
-        np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
-
-
-@pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("cls", [Circle, Disk])
-@pytest.mark.parametrize("family", scenes.DISK_FAMILIES, ids=lambda f: f.label)
-def test_one_circle_or_disk_takes_the_same_bits_as_pairs(family, cls, method):
-    """:func:`test_one_triangle_takes_the_same_bits_as_pairs` for circles and disks."""
-    rng = np.random.default_rng(12)
-    scene = family(rng, 300)
-    points = _points_against(scene.center[0], scene.points, rng)
-    one = cls(scene.center[0], scene.normal[0], scene.radius[0]).closest_point(points, method=method)
-    n = len(points)
-    repeated = cls(
-        np.tile(scene.center[0], (n, 1)), np.tile(scene.normal[0], (n, 1)), np.repeat(scene.radius[:1], n)
-    )
-    pairs = repeated.closest_point(points, method=method)
-    for name, value in vars(pairs).items():
-        np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
-
-
-# From this many circles or disks on, a compiled loop checks the arrays and
-# computes the unit normals; it must raise the same errors and give the same bits.
-LARGE = shapes_module._COMPILED_UNIT
-
-
-@pytest.mark.parametrize(
-    "field, row, value, match",
-    [
-        ("center", 9, np.inf, r"center must be finite; got inf at index \(9, 2\)"),
-        ("normal", 9, np.nan, r"normal must be finite; got nan at index \(9, 2\)"),
-        ("radius", 9, np.nan, r"radius must be finite; got nan at index \(9,\)"),
-        ("radius", 9, -1.0, r"radius must be >= 0; got -1.0 at index \(9,\)"),
-        ("normal", 9, 0.0, r"normal must be non-zero; got a zero vector at index \(9,\)"),
-    ],
-)
-@pytest.mark.parametrize("broadcast", [False, True])
-def test_large_batches_raise_the_same_errors(field, row, value, match, broadcast):
-    n = LARGE + 5
-    data = {"center": np.zeros((n, 3)), "normal": np.ones((n, 3)), "radius": np.ones(n)}
-    if broadcast and field != "center":
-        data["center"] = np.zeros(3)  # checked apart from the compiled loop
-    if broadcast and field != "radius":
-        data["radius"] = np.float64(1.0)
-    if field == "radius":
-        data["radius"][row] = value
-    elif field == "normal" and value == 0.0:
-        data["normal"][row] = 0.0
-    else:
-        data[field][row, 2] = value
-    with pytest.raises(ValueError, match=match):
-        Disk(**data)
-
-
-def test_large_batches_have_the_unit_normals_of_small_ones():
-    rng = np.random.default_rng(11)
-    n = LARGE + 1000
-    # Exponents over the whole float range, and components far apart in size.
-    normal = (rng.random((n, 3)) - 0.5) * np.exp2(rng.integers(-1000, 1020, (n, 1)))
-    normal *= np.exp2(rng.integers(-60, 1, (n, 3)))
-    normal[::5, 1] = 0.0
-    normal[::7] = rng.random((len(normal[::7]), 3)) + 0.01
-    assert np.isfinite(normal).all() and normal.any(axis=1).all()
-    large = Circle(np.zeros((n, 3)), normal, np.ones(n))
-    assert np.array_equal(large._unit_normal.view(np.int64), shapes_module._unit(normal).view(np.int64))
-    for k in range(0, n, 997):
-        assert np.array_equal(large._unit_normal[k], Circle(np.zeros(3), normal[k], 1.0)._unit_normal)
+@pytest.mark.parametrize("kind, method", KIND_METHODS_3D)
+def test_one_shape_takes_the_same_bits_as_pairs(kind, method):
+    """A batch against one shape has its own compiled loop where the kind
+    has one; every field matches the same shape repeated (the general loop)."""
+    rng = np.random.default_rng(13)
+    one = make(kind)
+    points = _points_against(_on_shape(one), rng.normal(size=(180, 3)) * 2, rng)
+    arrays = [np.asarray(getattr(one, name)) for name, _ in one._fields]
+    repeated = type(one)(*(np.repeat(a[None], len(points), axis=0) for a in arrays))
+    a, b = one.closest_point(points, method=method), repeated.closest_point(points, method=method)
+    for name, value in vars(b).items():
+        np.testing.assert_array_equal(getattr(a, name), value, err_msg=name)

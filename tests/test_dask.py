@@ -114,6 +114,24 @@ def test_bad_arguments_are_refused_before_any_task_runs():
         pdask.records(mesh, x, fields=["distance", "primitive"])
     with pytest.raises(ValueError, match="threads must be"):
         pdask.closest_point(mesh, x, threads=0)
+    with pytest.raises(ValueError, match="threads must be"):
+        pdask.closest_point(mesh, x, threads=True)
+    # Every message names its argument.
+    with pytest.raises(ValueError, match=r"^points must be an array of shape \(N, 3\)"):
+        pdask.distance(mesh, [[0, 0, 1], [0, 1]])
+    with pytest.raises(ValueError, match=r"^shape must be a single shape"):
+        pdask.distance(Triangle(np.zeros((4, 3, 3))), x)
+    with pytest.raises(ValueError, match="^fields must be names"):
+        pdask.records(mesh, x, fields=np.zeros((2, 3)))
+    with pytest.raises(TypeError, match="^fields must be a str or a sequence of str"):
+        pdask.records(mesh, x, fields=1.0)
+
+
+def test_threads_may_be_any_integer():
+    mesh = _mesh()
+    x = da.from_array(_cloud(100), chunks=50)
+    expected = mesh.distance(_cloud(100))
+    assert pdask.distance(mesh, x, threads=np.int64(1)).compute().tobytes() == expected.tobytes()
 
 
 def test_the_core_install_imports_without_dask_and_says_how_to_get_it():

@@ -191,6 +191,25 @@ def test_extreme_coordinates_keep_brute_force_and_bvh_equal(scale, offset):
             assert np.isfinite(bvh.distance).all()
 
 
+def test_an_infinite_answer_after_a_left_out_copy_is_the_same_with_the_hierarchy():
+    """``eberly``'s squared distance overflows to inf for a point ``1e200``
+    from a unit triangle, and is NaN (no answer) on a triangle of edges
+    ``1e200``.  The answer is inf, from the unit triangle, with either broad
+    phase, though the hierarchy leaves out the copy of the large triangle
+    and so stores fewer primitives than the unit triangle's index."""
+    unit = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    point = [0.5, 0.5, 1e200]
+    vertices = np.concatenate([unit * 1e200, unit])
+    for broad_phase in ("brute", "bvh"):
+        mesh = TriangleMesh(vertices, [[0, 1, 2], [0, 1, 2], [3, 4, 5]], broad_phase=broad_phase)
+        r = mesh.closest_point(point, method="eberly")
+        assert (r.distance, r.face, r.feature) == (np.inf, 2, Feature.FACE), broad_phase
+        large = proximity.Triangle(unit * 1e200)
+        shapes = [large, large, proximity.Triangle(unit)]
+        r = proximity.Scene(shapes, broad_phase=broad_phase).closest_point(point, method="eberly")
+        assert (r.distance, r.primitive) == (np.inf, 2), broad_phase
+
+
 def test_permuting_faces_permutes_the_answer():
     vertices, faces = MESHES["icosphere"]
     points = _points("icosphere", n=60)
@@ -244,6 +263,7 @@ def test_the_broad_phase_is_chosen_by_size():
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, -1, 2]], {}, "got -1"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.zeros((0, 3), int), {}, r"F >= 1; got shape \(0, 3\)"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], {"broad_phase": "kd"}, "broad_phase must be one of"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2], [0, 1]], {}, r"^faces must be an array of shape"),
     ],
 )
 def test_invalid_meshes_are_refused_with_a_message_naming_the_argument(vertices, faces, kwargs, message):
@@ -260,6 +280,16 @@ def test_invalid_queries_are_refused():
         mesh.distance(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="method must be one of"):
         mesh.closest_point([0, 0, 1], method="fast")
+
+
+@pytest.mark.parametrize("bad", [[[0, 0, 1], [0, 1]], [["a", "b", "c"]], {"a": 1}, [[2**1100, 0, 0]]])
+def test_the_trimesh_drop_in_names_points_it_cannot_read(bad):
+    from proximity.trimesh_compat import ProximityQuery, closest_point, signed_distance
+
+    mesh = ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    for query in (closest_point, signed_distance, lambda m, p: ProximityQuery(m).vertex(p)):
+        with pytest.raises(ValueError, match=r"^points must be an array of shape \(n, 3\)"):
+            query(mesh, bad)
 
 
 # -- the trimesh drop-in ---------------------------------------------------------------

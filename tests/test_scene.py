@@ -183,7 +183,7 @@ def test_shapes_nan_rows_and_scalars():
         (
             [Triangle(np.eye(3)), "disk"],
             TypeError,
-            r"shapes\[1\] must be a Triangle, Disk, Circle or TriangleMesh",
+            r"shapes\[1\] must be a proximity shape \(Triangle, Segment, Point, Disk, Circle, TriangleMesh",
         ),
         ([], ValueError, "at least one primitive"),
         ([Triangle(np.zeros((0, 3, 3)))], ValueError, "at least one primitive"),

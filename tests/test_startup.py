@@ -46,3 +46,76 @@ def test_no_writable_cache_warns_and_still_answers(tmp_path):
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "2.0"
     assert "no writable cache directory" in result.stderr
+
+
+# Eight threads of a new process make their first queries at once: single
+# points and batches, on a triangle and a disk.  The first query loads Numba,
+# so they race to load it.
+FIRST_QUERIES = """
+import sys, threading
+import numpy as np
+import proximity
+
+shapes = [
+    proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+    proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1),
+]
+points = np.random.default_rng(0).normal(size=(2000, 3))
+barrier = threading.Barrier(8)
+answers, errors = {}, []
+
+def first_query(i):
+    shape, batch = shapes[i % 2], i % 4 >= 2
+    barrier.wait()
+    try:
+        answers[i] = shape.distance(points if batch else points[0])
+    except Exception as error:
+        errors.append(f"thread {i}: {type(error).__name__}: {error}")
+
+threads = [threading.Thread(target=first_query, args=(i,)) for i in range(8)]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+try:  # and the process still answers
+    answers["after"] = shapes[0].distance(points)
+except Exception as error:
+    errors.append(f"after: {type(error).__name__}: {error}")
+if errors:
+    sys.exit("\\n".join(errors))
+np.save(sys.stdout.buffer, np.concatenate([np.ravel(answers[k]) for k in [*range(8), "after"]]))
+"""
+
+
+def test_first_queries_from_threads_at_once(tmp_path):
+    import io
+
+    import numpy as np
+
+    points = np.random.default_rng(0).normal(size=(2000, 3))
+    shapes = [
+        proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+        proximity.Disk(center=[0, 0, 0], normal=[0, 0, 1], radius=1),
+    ]
+    # Also compiles the kernels into the cache the new processes load them from.
+    expected = np.concatenate(
+        [np.ravel(shapes[i % 2].distance(points if i % 4 >= 2 else points[0])) for i in range(8)]
+        + [shapes[0].distance(points)]
+    )
+    # The race is lost in a fraction of processes (about half on two cores
+    # before the fix, fewer on more): 24 processes, two at a time.
+    failures = []
+    for _ in range(12):
+        runs = [
+            subprocess.Popen(
+                [sys.executable, "-c", FIRST_QUERIES], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+            )
+            for _ in range(2)
+        ]
+        for run in runs:
+            out, err = run.communicate(timeout=600)
+            if run.returncode != 0:
+                failures.append(err.decode().strip().splitlines()[-1])
+            else:
+                np.testing.assert_array_equal(np.load(io.BytesIO(out)), expected)
+    assert not failures, f"{len(failures)} of 24 processes failed; the first: {failures[0]}"

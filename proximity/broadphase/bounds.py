@@ -196,9 +196,24 @@ def primitive_cull(kinds, params):
             looser = p.kernels.cull(p.code, params, rows, cull)
             if looser is not None:
                 loose[p.code] = (rows, looser)
-    if not loose:
-        return cull, cull
-    looser = cull.copy()
-    for rows, values in loose.values():
-        looser[rows] = values
+    looser = cull
+    if loose:
+        looser = cull.copy()
+        for rows, values in loose.values():
+            looser[rows] = values
+    if params.shape[1] > primitives.N_PARAMS:  # rounded primitives: their radius, around
+        radius = params[:, primitives.N_PARAMS]
+        for rows in (cull,) if looser is cull else (cull, looser):
+            _widen(rows, radius)
     return cull, looser
+
+
+def _widen(cull, radius):
+    """Cull rows of primitives rounded by ``radius``: boxes and slab ranges
+    widened by it (outwards, beyond their rounding; infinite ranges stay)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        grow = radius * (1.0 + 2.0**-50)
+        cull[:, 0:3] -= grow[:, None]
+        cull[:, 3:6] += grow[:, None]
+        cull[:, 9] -= grow
+        cull[:, 10] += grow

@@ -7,6 +7,7 @@ import numpy as np
 
 from .. import primitives
 from .._jit import kernel
+from .._rounding import certify_difference
 from ._alloc import readonly
 from .traverse import Outputs, TreeArrays, _gather, search_kernel
 
@@ -126,7 +127,7 @@ def nearest(tree, method, points, full, loose=False):
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     with numba.parallel_chunksize(1):
-        search_kernel(method, kinds)(arrays, tree.depth, magnitude, points, order, out, full)
+        search_kernel(method, kinds, tree.radius)(arrays, tree.depth, magnitude, points, order, out, full)
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
         _resolve(tree, rows, points, out, full, cull, bounds, magnitude)
@@ -156,6 +157,12 @@ def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
             if len(chosen) == 0:
                 continue
             r = primitive.kernels.resolve(primitive.code, tree.params[chosen], p)
+            if tree.radius >= 0:  # rounded primitives: d - R, certified
+                rows = [(primitive, tree.params[k], p) for k in chosen]
+                radius = tree.params[chosen, tree.radius]
+                d = r["distance"]
+                e = certify_difference(d - radius, d, radius, lambda bad, rows=rows: [rows[b] for b in bad])
+                r = dict(r, distance=e)
             for j, idx in enumerate(tree.index[chosen]):
                 if not np.isnan(r["distance"][j]):
                     answers.append((float(r["distance"][j]), int(idx), r, j))

@@ -17,6 +17,7 @@ from ._alloc import empty
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
+N_PARAMS = primitives.N_PARAMS
 
 
 #: Nodes over at most this many primitives are fitted subtree by subtree,
@@ -142,9 +143,12 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
     """The ranges of node ``i``'s three slabs over stored primitives ``first .. last - 1``.
 
     A primitive that is the hull of points (``vertices[kind]`` of them, at
-    the start of its row) counts by its points, any other by the eight
-    corners of its box.
+    the start of its row) counts by its points, widened by its radius
+    where it is rounded (rows wider than ``N_PARAMS``: the axes are no
+    longer than 1), any other by the eight corners of its box (widened
+    already).
     """
+    rounded = params.shape[1] > N_PARAMS
     ux, uy, uz = bounds[i, 6], bounds[i, 7], bounds[i, 8]
     vx, vy, vz = bounds[i, 11], bounds[i, 12], bounds[i, 13]
     wx, wy, wz = bounds[i, 16], bounds[i, 17], bounds[i, 18]
@@ -153,6 +157,7 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
     lw, hw = math.inf, -math.inf
     for k in range(first, last):
         n = vertices[kinds[k]]
+        grow = params[k, N_PARAMS] * (1.0 + 2.0**-50) if rounded and n > 0 else 0.0
         for c in range(n if n > 0 else 8):
             if n > 0:
                 x, y, z = params[k, 3 * c], params[k, 3 * c + 1], params[k, 3 * c + 2]
@@ -161,11 +166,11 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
                 y = cull[k, 4 if c & 2 else 1]
                 z = cull[k, 5 if c & 4 else 2]
             h = ux * x + uy * y + uz * z
-            lu, hu = min(lu, h), max(hu, h)
+            lu, hu = min(lu, h - grow), max(hu, h + grow)
             h = vx * x + vy * y + vz * z
-            lv, hv = min(lv, h), max(hv, h)
+            lv, hv = min(lv, h - grow), max(hv, h + grow)
             h = wx * x + wy * y + wz * z
-            lw, hw = min(lw, h), max(hw, h)
+            lw, hw = min(lw, h - grow), max(hw, h + grow)
     for c, low, high in ((9, lu, hu), (14, lv, hv), (19, lw, hw)):
         finite = math.isfinite(low) and math.isfinite(high)
         bounds[i, c] = low if finite else -math.inf

@@ -26,7 +26,8 @@ from numba import prange
 from numba.core import types
 
 from .. import certified
-from .._jit import kernel, launcher, specialize
+from .._fp import EPS, faithful_difference
+from .._jit import inline, kernel, launcher, specialize
 from .bounds import SLACK, _bound_sqr, _culled, _scale
 
 BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
@@ -65,6 +66,9 @@ _LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
 EVALUATE = INTERVAL = None
 EXACT_FALLBACK = False
 SEED_POINT = True
+# The column of the rows' radii where the tree holds rounded primitives
+# (:class:`proximity.Inflated`), else -1.
+RADIUS = -1
 # The links of a chain: the codes a link's kernel module answers for, its
 # function, and the rest of the chain.
 LOW = HIGH = 0
@@ -91,7 +95,10 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
     kinds, params, index, cull, bounds, child, count = tree
     dist, sqr, point, feature, extra, flag, prim, undecided = out
     n = points.shape[0]
-    sentinel = index.shape[0]
+    # Above every caller's index, which may reach past the stored count
+    # where copies were left out (:func:`~.build.distinct`): an infinite
+    # answer, which ties with the initial ``best``, then still wins.
+    sentinel = np.iinfo(np.int64).max
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     # The previous point's closest point, a point of the collection: points
@@ -128,11 +135,16 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
                         if _culled(cull, k, s, qx, qy, qz, reach):
                             continue
                         r = EVALUATE(kinds, params, k, px, py, pz)
+                        if RADIUS >= 0:
+                            # A rounded primitive: d - R, ranked signed (negative inside).
+                            r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
                         certain = True
                         if EXACT_FALLBACK:
                             if r[0] != certified.CERTAIN:
                                 certain = False
                                 lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                                if RADIUS >= 0:
+                                    lo, hi = _less(lo, hi, params[k, RADIUS])
                                 lowest = min(lowest, lo)
                                 upper = min(upper, hi)
                         if certain:
@@ -146,7 +158,11 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
                                 w_feature = r[6]
                                 w_a0, w_a1, w_a2 = r[7], r[8], r[9]
                                 w_flag = r[10]
-                        reach = min(min(best, upper) * s, cap) + SLACK
+                        if RADIUS >= 0:
+                            # The best may be negative (inside a rounded primitive).
+                            reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
+                        else:
+                            reach = min(min(best, upper) * s, cap) + SLACK
                         limit = reach * reach
                     node = -1
                 else:
@@ -203,6 +219,27 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
 
 
 
+@inline
+def _rounded(r, radius, px, py, pz, certify):
+    """A primitive's answer ``r`` for the primitive rounded by ``radius``:
+    ``d - radius`` (the closest point stays the core's: the caller moves it
+    to the rounded surface, :func:`proximity._rounding.surface_points`).
+    ``certify``: the status is ``EXACT`` where ``d - radius`` is not known
+    to be faithful."""
+    st, d, sqr, x, y, z, f, a0, a1, a2, flag = r
+    ok, e = faithful_difference(d, radius)
+    if certify and not ok:
+        st = certified.EXACT
+    return st, e, sqr, x, y, z, f, a0, a1, a2, flag
+
+
+@inline
+def _less(lo, hi, radius):
+    """Bounds on ``d* - radius`` from bounds on ``d*``, widened by the subtractions' rounding."""
+    w = 2.0 * EPS * (abs(hi) + radius) + 5e-324
+    return lo - radius - w, hi - radius + w
+
+
 def _loop(handle, tree, depth, magnitude, points, order, out, full):
     """:func:`_search_block` for every block of points, on the threads."""
     for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
@@ -244,14 +281,15 @@ def _chain(present, make, tag):
 
 
 @functools.cache
-def search_kernel(method, present):
+def search_kernel(method, present, radius=-1):
     """The compiled search of ``method`` over trees holding the kinds
-    ``present`` (:class:`~proximity.primitives.Primitive` records), as a
-    function of the loop's arguments but the handle."""
+    ``present`` (:class:`~proximity.primitives.Primitive` records), with
+    their radii in column ``radius`` of the rows (-1: none), as a function
+    of the loop's arguments but the handle."""
     tag = method.name
     evaluate = _chain(present, lambda p: p.kernels.row_query(p, method), tag)
     interval = _chain(present, lambda p: p.kernels.row_interval(p), "interval")
-    names = "_".join(p.name for p in present)
+    names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     block = specialize(
         _search_block,
         f"{tag}__{names}",
@@ -261,6 +299,7 @@ def search_kernel(method, present):
         INTERVAL=interval,
         EXACT_FALLBACK=method.exact_fallback,
         SEED_POINT=not method.loose,
+        RADIUS=radius,
     )
     return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
 
@@ -275,7 +314,7 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
     px, py, pz = p[0], p[1], p[2]
     s = _scale(px, py, pz, magnitude)
     qx, qy, qz = px * s, py * s, pz * s
-    reach = bound * s + SLACK
+    reach = max(bound * s, 0.0) + SLACK  # a bound below 0: inside a rounded primitive
     limit = reach * reach
     stack = np.empty(depth + 2, np.int64)
     stack[0] = 0

@@ -57,6 +57,12 @@ class Tree:
         return primitives.present(self.kinds)
 
     @property
+    def radius(self):
+        """The column of the rows' radii where the tree holds rounded
+        primitives (rows one wider than :data:`~proximity.primitives.N_PARAMS`), else -1."""
+        return primitives.N_PARAMS if self.params.shape[1] > primitives.N_PARAMS else -1
+
+    @property
     def loose(self):
         """Whether the loose boxes differ from the tight ones."""
         return self.loose_cull is not self.cull

@@ -16,6 +16,7 @@ import proximity
 from proximity import primitives
 
 _TRIANGLE = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+_SEGMENT = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.25]])
 
 
 def _round(cls: type) -> Callable[..., proximity.Shape]:
@@ -33,6 +34,8 @@ BUILDERS: dict[str, tuple[Callable[..., proximity.Shape], tuple[int, ...]]] = {
     "triangle": (lambda offsets, dim: proximity.Triangle(_TRIANGLE[:, :dim] + offsets[..., None]), (3, 2)),
     "disk": (_round(proximity.Disk), (3,)),
     "circle": (_round(proximity.Circle), (3,)),
+    "segment": (lambda offsets, dim: proximity.Segment(_SEGMENT[:, :dim] + offsets[..., None]), (3, 2)),
+    "point": (lambda offsets, dim: proximity.Point(_SEGMENT[1, :dim] + offsets), (3, 2)),
 }
 
 

@@ -1,0 +1,133 @@
+"""The disk cache of compiled kernels: where it is kept, and how its faults are survived.
+
+The cache sits next to the sources (Numba's default).  Where that directory
+cannot be written (a read-only install), Numba's user-wide cache directory
+is used, or ``NUMBA_CACHE_DIR`` when it is set; where none can be written,
+kernels are compiled in memory at every start, with a warning.
+
+Numba keeps each cached function in an index file (``*.nbi``) and one data
+file per compiled signature (``*.nbc``), and raises from the query that
+compiles the function when either cannot be read (a file truncated by an
+interrupted copy or a full disk: ``UnpicklingError``, ``EOFError``) or
+written (``OSError``: a disk that fills up after the start, which the check
+of the directory at import cannot foresee).  :func:`compiled` makes a
+kernel whose cache survives both:
+
+- an entry that cannot be read is compiled again, and the new one replaces
+  it where the directory is writable (an unreadable index is started
+  afresh);
+- an entry that cannot be written stays in memory; the process then writes
+  no more entries (with one warning) but still reads those already there.
+
+The directory is checked by creating a file, not by writing to it: on a
+full disk whose cache holds the kernels already, they are still read.
+"""
+
+import os
+import tempfile
+import warnings
+
+from numba import njit
+from numba.misc.appdirs import user_cache_dir
+
+
+def _writable(directory):
+    """Whether files can be created in ``directory`` (made if missing)."""
+    try:
+        os.makedirs(directory, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _cache_usable():
+    configured = os.environ.get("NUMBA_CACHE_DIR")
+    if configured:
+        return _writable(configured)
+    here = os.path.dirname(os.path.abspath(__file__))
+    return _writable(os.path.join(here, "__pycache__")) or _writable(
+        user_cache_dir(appname="numba", appauthor=False)
+    )
+
+
+def _warn_uncached(reason):
+    warnings.warn(
+        f"proximity: {reason}; kernels will be compiled again in every process",
+        RuntimeWarning,
+        stacklevel=3,
+    )
+
+
+#: Whether compiled kernels are kept on disk.
+CACHE = _cache_usable()
+if not CACHE:
+    _warn_uncached("no writable cache directory (the package's, the user cache or NUMBA_CACHE_DIR)")
+
+_saving = CACHE  # cleared at the first entry that cannot be written
+_guarded = True  # cleared, with a warning, if Numba's cache cannot be guarded
+
+
+def compiled(func, signature=(), **options):
+    """``njit(*signature, **options)(func)``, kept in the disk cache where
+    there is one (:data:`CACHE`): compiled now for each of ``signature``
+    (and for no other), or at its first call without one."""
+    global _guarded
+    if CACHE and _guarded:
+        dispatcher = njit(cache=True, **options)(func)
+        if _guard_numba_cache(dispatcher):
+            for sig in signature:
+                dispatcher.compile(sig)
+            if signature:
+                dispatcher.disable_compile()
+            return dispatcher
+        _guarded = False
+        _warn_uncached("this version of Numba's disk cache cannot be guarded against damaged files")
+    return njit(*signature, **options)(func)
+
+
+class _Guarded:
+    """A dispatcher's Numba cache, whose faults fall back to compiling (see the module's docstring)."""
+
+    def __init__(self, cache):
+        self._cache = cache
+
+    def __getattr__(self, name):
+        return getattr(self._cache, name)
+
+    def load_overload(self, sig, target_context):
+        # Whatever a damaged file raises, compiling again gives the right
+        # kernel, and its save replaces the entry.
+        try:
+            return self._cache.load_overload(sig, target_context)
+        except Exception:
+            return None
+
+    def save_overload(self, sig, data):
+        global _saving
+        if not _saving:
+            return
+        try:
+            try:
+                self._cache.save_overload(sig, data)
+            except OSError:
+                raise
+            except Exception:
+                # The index cannot be read: start it afresh with this entry.
+                self._cache.flush()
+                self._cache.save_overload(sig, data)
+        except OSError as error:
+            _saving = False
+            _warn_uncached(f"the kernel cache cannot be written ({error})")
+
+
+def _guard_numba_cache(dispatcher):
+    """Put ``dispatcher``'s disk cache (Numba's private ``_cache``, made by
+    ``cache=True``) behind :class:`_Guarded`; False, leaving it as it is,
+    where this version of Numba has no such cache."""
+    cache = getattr(dispatcher, "_cache", None)
+    if not all(callable(getattr(cache, name, None)) for name in ("load_overload", "save_overload", "flush")):
+        return False
+    dispatcher._cache = _Guarded(cache)
+    return True

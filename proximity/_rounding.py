@@ -1,0 +1,107 @@
+"""Rounded primitives: ``d - r`` certified, and the nearest point of the rounded surface.
+
+What the rounded shapes (:mod:`proximity.inflated`) and a collection of
+rounded primitives (:mod:`proximity.broadphase`) share.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+
+from . import primitives
+
+
+def certify_difference(e, d, r, exact_rows):
+    """``e = d - r`` where it is faithful for the exact ``d* - r`` (``d``
+    faithful), else the exact fallback's value; ``exact_rows(flat rows)``
+    gives ``(primitive, params, point)`` for each of those rows (the
+    nearest primitive's kind and stored row, and the query point).
+
+    ``d*`` is within ``spacing(d)`` of ``d`` (0 exactly where ``d`` is 0:
+    the certified method gives 0 only on the shape), and ``d - r`` is ``e``
+    plus the subtraction's error, exactly (Knuth's TwoSum), so ``d* - r``
+    is within ``|err| + spacing(d)`` of ``e``: ``e`` is faithful where that
+    is less than half the spacing at ``e``, the nearer neighbour's distance
+    at most.
+    """
+    with np.errstate(invalid="ignore", over="ignore"):
+        back = e - d
+        err = (d - (e - back)) + (-r - back)
+        u = np.where(d == 0, 0.0, np.spacing(d))
+        gap = np.where(e == 0, 2.0**-1074, np.spacing(np.abs(e)) * 0.5)
+        ok = (np.abs(err) + u) * (1.0 + 2.0**-50) < gap
+    bad = np.flatnonzero(~ok.reshape(-1) & np.isfinite(e).reshape(-1))
+    if len(bad) == 0:
+        return e
+    from . import _exact  # in Python: no compiled code
+
+    e = np.array(e, dtype=np.float64, copy=True)
+    flat = e.reshape(-1)
+    radii = np.broadcast_to(r, e.shape).reshape(-1)
+    for k, (primitive, params, point) in zip(bad, exact_rows(bad), strict=True):
+        bounds = primitive.kernels.exact_sqr_bounds(primitive.code, params, point)
+        flat[k] = _exact.minus_radius(bounds, Fraction(float(radii[k])))
+    return e
+
+
+def surface_points(p, c, d, r, rows_of):
+    """The nearest point of the rounded surface to each query point ``p``:
+    from the core's closest point ``c`` (at distance ``d``) towards ``p`` by
+    ``r``; or, where ``p`` is so near the core that the direction of ``p -
+    c`` is lost in the rounding of ``c`` (``d^2 < 64 r eps M``, ``M`` the
+    coordinates' magnitude), along the core's normal on ``p``'s side
+    (``rows_of(flat rows) -> (kinds, params)`` gives the primitives there).
+    That point is on the surface, and within ``2 d`` of the nearest one."""
+    dim = p.shape[-1]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        point = c + (p - c) * np.where(r == 0, 0.0, r / d)[..., None]
+        m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
+        lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
+    rows = np.flatnonzero(lost.reshape(-1))
+    if len(rows):
+        flat_p, flat_c = p.reshape(-1, dim)[rows], c.reshape(-1, dim)[rows]
+        u = surface_directions(*rows_of(rows))[:, :dim]
+        side = np.where(np.einsum("ij,ij->i", flat_p - flat_c, u) < 0, -1.0, 1.0)
+        point = np.array(point, copy=True)
+        radius = np.broadcast_to(r, d.shape).reshape(-1)[rows]
+        point.reshape(-1, dim)[rows] = flat_c + (radius * side)[:, None] * u
+    return point
+
+
+def surface_directions(kinds, params):
+    """A unit vector normal to each primitive at every point of it, ``(n, 3)``:
+    along which a point on the primitive reaches the rounded surface.
+
+    A triangle's plane normal; a segment's (or a zero-area triangle's
+    longest edge's) perpendicular with the smallest component along the
+    coordinate axis least aligned with it; a point's ``+z``; a disk's and a
+    circle's axis.
+    """
+    out = np.zeros((len(kinds), 3))
+    out[:, 2] = 1.0
+    for p in primitives.BY_CODE:
+        rows = np.flatnonzero(kinds == p.code)
+        if len(rows) == 0:
+            continue
+        q = params[rows]
+        if p.axis is not None:
+            n = q[:, p.axis : p.axis + 3]
+        elif p.vertices >= 2:
+            v = q[:, : 3 * p.vertices].reshape(-1, p.vertices, 3)
+            # Differences in units of their largest (so that no product underflows or overflows).
+            v = v - v[:, :1]
+            size = np.max(np.abs(v), axis=(1, 2), keepdims=True)
+            v = v / np.where(size > 0, size, 1.0)
+            edges = v - np.roll(v, 1, axis=1)
+            longest = edges[np.arange(len(v)), np.argmax(np.linalg.norm(edges, axis=2), axis=1)]
+            n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]) if p.vertices == 3 else np.zeros_like(longest)
+            flat = np.linalg.norm(n, axis=1) == 0
+            axis = np.eye(3)[np.argmin(np.abs(longest), axis=1)]
+            n = np.where(flat[:, None], np.cross(longest, axis), n)
+        else:
+            continue
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        good = (length[:, 0] > 0) & np.isfinite(length[:, 0])
+        out[rows[good]] = n[good] / length[good]
+    return out
+
