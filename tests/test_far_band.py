@@ -1,12 +1,14 @@
 """Shapes far smaller than their distance from the point, against the exact reference.
 
-``robust`` scales the differences ``V - P`` so that the largest is about 1.
-The shape's own terms can be far smaller: the square of a triangle's normal
-is a fourth power of its edges.  The sweeps below put the point ``2^200`` to
-``2^300`` triangle sizes away, at every integer exponent, in two frames: the
-shape near the origin and the point far (the scalar path, which scales), and
-the point near with the shape tiny (the safe window, where batches run their
-SIMD loop).
+``robust`` scales the differences ``V - P`` (``P - C`` for a circle or a disk)
+so that the largest is about 1.  The shape's own terms can be far smaller:
+the square of a triangle's normal is a fourth power of its edges, and a
+circle's radial part can be shorter than ``2^-511`` of the radius.  The
+sweeps below put the point ``2^200`` to ``2^300`` triangle sizes away (and
+the circle's radius ``2^500`` to ``2^546`` times the point's offset from its
+center), at every integer exponent, in two frames: the shape near the origin
+and the point far (the scalar path, which scales), and the point near with
+the shape tiny (the safe window, where batches run their SIMD loop).
 
 The point lies far along one coordinate axis, so that the differences keep
 the triangle's extent in the other two and lose it along the axis: the
@@ -20,9 +22,10 @@ import pytest
 
 import proximity
 from proximity.testing import exact
-from tests.checks import BOUND, check_triangle
+from tests.checks import BOUND, check_round, check_triangle
 
 EXPONENTS = range(200, 301)
+CIRCLE_EXPONENTS = range(500, 546)
 FRAMES = ("far point", "tiny shape")
 # A triangle's size when many points at every exponent meet one shape in the
 # safe window (``2^-62`` to ``2^39`` away): its normal's square, whatever the
@@ -115,3 +118,73 @@ def test_meshes_and_scenes_keep_the_bound_and_answer_as_their_nearest_face(frame
             scene_scale = max(scale, exact.circle_scale(disk.center, disk.radius, p))
             nearest = min(*exact_faces[i], exact_disk[i])
             _error_within_bound(s.distance[i], nearest, scene_scale, f"scene, {where}")
+
+
+def _circle_cases(frame, seed):
+    """A circle of radius ``2^k`` to ``2^(k+1)`` at every exponent, and a point
+    about 1 from its center: ``2^-k`` of the radius from its axis."""
+    rng = np.random.default_rng(seed)
+    centers, normals, radii, points = [], [], [], []
+    for k in CIRCLE_EXPONENTS:
+        for _ in range(2):
+            c = rng.uniform(-1, 1, 3)
+            n = rng.normal(size=3)
+            if rng.random() < 0.5:
+                n = np.zeros(3)
+                n[rng.integers(3)] = rng.choice([-1.0, 1.0])
+            f = _frame(frame, k)
+            centers.append(c * f)
+            normals.append(n)
+            radii.append(rng.uniform(1, 2) * 2.0**k * f)
+            points.append((c + rng.normal(size=3)) * f)
+    return np.array(centers), np.array(normals), np.array(radii), np.array(points)
+
+
+ROUND_METHODS = ("robust", "certified")
+
+
+@pytest.mark.parametrize("method", ROUND_METHODS)
+@pytest.mark.parametrize("frame", FRAMES)
+def test_circles_and_disks_keep_their_rim_point_on_the_rim(frame, method):
+    """The point is 2^-500 to 2^-546 of the radius from the axis: the closest
+    point of a circle stays on it, one point at a time and in a batch."""
+    c, n, r, p = _circle_cases(frame, 4)
+    for kind, shape in (("circle", proximity.Circle), ("disk", proximity.Disk)):
+        batch = shape(c, n, r).closest_point(p, method=method)
+        for i in range(len(p)):
+            single = shape(c[i], n[i], r[i]).closest_point(p[i], method=method)
+            check_round(kind, c[i], n[i], r[i], p[i], single)
+            check_round(kind, c[i], n[i], r[i], p[i], batch[i])
+            if method == "certified":
+                reference = exact.circle_distance if kind == "circle" else exact.disk_distance
+                assert exact.ulps(float(single.distance), reference(c[i], n[i], r[i], p[i])) < 1.0
+
+
+@pytest.mark.parametrize("method", ROUND_METHODS)
+@pytest.mark.parametrize("frame", FRAMES)
+def test_many_points_against_one_circle_keep_its_rim_point_on_the_rim(frame, method):
+    # The radius is 2^520 (out of the safe window) or 1 (in it, for the SIMD loop).
+    radius = 2.0**520 if frame == "far point" else 1.0
+    center = np.array([0.25, -0.5, 0.75]) * radius * 2.0**-500
+    normal = np.array([0.3, -0.8, 0.5])
+    rng = np.random.default_rng(5)
+    k = np.repeat(np.array(CIRCLE_EXPONENTS, float), 2)
+    points = center + rng.normal(size=(len(k), 3)) * radius * 2.0 ** -k[:, None]
+    result = proximity.Circle(center, normal, radius).closest_point(points, method=method)
+    for i in range(len(points)):
+        check_round("circle", center, normal, radius, points[i], result[i])
+
+
+@pytest.mark.parametrize("method", ROUND_METHODS)
+@pytest.mark.parametrize("frame", FRAMES)
+def test_scenes_answer_with_the_circles_own_rim_point(frame, method):
+    c, n, r, p = _circle_cases(frame, 6)
+    # The scene's triangle is farther than every circle from its point.
+    far = proximity.Triangle(np.eye(3) * 4.0 * r.max())
+    for i in range(0, len(p), 3):
+        ring = proximity.Circle(c[i], n[i], r[i])
+        got = proximity.Scene([far, ring]).closest_point(p[i], method=method)
+        alone = ring.closest_point(p[i], method=method)
+        assert got.primitive == 1
+        assert (got.distance, got.point.tolist()) == (alone.distance, alone.point.tolist())
+        check_round("circle", c[i], n[i], r[i], p[i], got)
