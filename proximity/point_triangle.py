@@ -41,12 +41,12 @@ Two methods:
       and ``|n|^2`` is a fourth power of the edges: for a triangle about
       ``2^-250`` times its distance from ``P`` or smaller, or a sliver
       ``2^-500`` times as wide as that distance, it falls towards the
-      subnormal range, where it and the edge tests lose bits.  The face is a candidate only where
-      ``|n|^2 >= 2^-1000`` (:data:`NN_MIN`), so every product of the face
-      test that matters is a normal float.  Below, the triangle is too thin
-      for the face to matter: its inradius is at most ``sqrt(|n|)``, below
-      ``2^-250``, while ``S >= 2^-64`` where the test runs, so the nearest
-      edge is as near as the face within ``2^-186 S``.
+      subnormal range, where it and the edge tests lose bits.  The face is a
+      candidate only where ``|n|^2 >= 2^-1000`` (:data:`NN_MIN`), so every
+      product of the face test that matters is a normal float.  Below, the
+      triangle is too thin for the face to matter: its inradius is at most
+      ``sqrt(|n|)``, below ``2^-250``, while ``S >= 2^-64`` where the test
+      runs, so the nearest edge is as near as the face within ``2^-186 S``.
     * Otherwise the minimum is over the three edges, each a clamped
       projection that never divides by zero: a degenerate triangle (collinear,
       or with coincident vertices) is handled as the segments or the point
