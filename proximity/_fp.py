@@ -17,7 +17,10 @@ from ._jit import inline
 
 EPS = 2.0**-52
 # Inside this window of the largest coordinate difference, no product of up
-# to four differences can overflow or lose relevant bits to underflow.
+# to four differences of that size can overflow or lose relevant bits to
+# underflow.  A shape far smaller than its distance from the point has far
+# smaller terms (the square of a triangle's normal, a circle's radial part),
+# which its kernel guards on its own.
 SAFE_MIN = 2.0**-64
 SAFE_MAX = 2.0**64
 TINY = 5e-324  # the smallest subnormal: a divisor that is never zero

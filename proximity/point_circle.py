@@ -25,9 +25,16 @@ Two methods:
     1-Lipschitz in ``q``, so near the axis, where the direction of ``Q - C``
     is lost to rounding, the distance is still accurate.  Differences whose
     size lies outside ``[2^-64, 2^64]`` are scaled by a power of two first,
-    so ``h^2`` and ``(q - R)^2`` neither overflow nor underflow.  Normals of
-    any length are normalised once, at construction, the same way.  The
-    result satisfies ``|d - d*| <= 8 eps (|P - C| + R) + 2^-1075``; the
+    so ``h^2`` and ``(q - R)^2`` neither overflow nor underflow.  That
+    scaling is set by the larger of ``|D|`` and ``R``, and ``q`` can be far
+    smaller: below ``2^-511`` in that frame (a point about
+    ``2^-511 (|D| + R)`` from the axis, off it by more than rounding),
+    ``q^2`` is subnormal, which costs the distance nothing but would make
+    ``(Q - C) / q``, the direction of the rim point, longer or shorter than
+    a unit vector; there ``q`` is measured again from ``Q - C`` scaled up by
+    a power of two.  Normals of any length are normalised once, at
+    construction, the same way.  The result satisfies
+    ``|d - d*| <= 8 eps (|P - C| + R) + 2^-1075``; the
     absolute term is the rounding of a subnormal distance.
 """
 
@@ -39,6 +46,11 @@ from ._jit import inline
 # The radial part is the difference of two vectors of length up to |D|; below
 # this multiple of eps * |D| its direction is rounding noise.
 AXIS_TOLERANCE = 8.0 * EPS
+# Below this length the radial part's square is subnormal and its length has
+# lost bits, which would put the rim point off the circle: it is measured again
+# from its components times LIFT.
+Q_MIN = 2.0**-511
+LIFT = 2.0**600
 
 
 @inline
@@ -89,7 +101,31 @@ def decompose(cx, cy, cz, ux, uy, uz, r, px, py, pz):
         dx, dy, dz, r = dx * f1 * f2, dy * f1 * f2, dz * f1 * f2, r * f1 * f2
         g = (g[0] / f1 / f2, g[1] / f1, 1.0 / f2)
     h, qx, qy, qz, q, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+    if short_radial(q, on_axis):
+        q = remeasure(qx, qy, qz)
     return h, qx, qy, qz, q, on_axis, r, g
+
+
+@inline
+def short_radial(q, on_axis):
+    """Whether the length ``q`` of the radial part lost bits to underflow:
+    then :func:`rim_direction`'s ``Q - C`` over ``q`` is not a unit vector.
+    On the axis the direction is not taken from ``Q - C``."""
+    return (q < Q_MIN) & (not on_axis)
+
+
+@inline
+def remeasure(qx, qy, qz):
+    """``|Q - C|`` from its components times :data:`LIFT`, for a radial part
+    that :func:`short_radial` flags.
+
+    The lift is exact and makes the squares normal floats.  Off the axis some
+    component's square did not underflow to zero (else ``q`` would be zero
+    and on the axis), so the length is at least ``2^-538`` and shortening it
+    again is exact too.
+    """
+    qx, qy, qz = qx * LIFT, qy * LIFT, qz * LIFT
+    return math.sqrt(qx * qx + qy * qy + qz * qz) / LIFT
 
 
 @inline

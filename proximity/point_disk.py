@@ -50,6 +50,7 @@ from .point_circle import (
     rim_direction,
     seed_circle,
     seed_projection,
+    short_radial,
     window,
 )
 from .primitives import CIRCLE, DISK
@@ -282,10 +283,13 @@ def exact_row(row, args, point):
 @inline
 def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """One query of the compiled loops' robust path, without branches:
-    its nine results, and whether it was in the safe window (where they hold)."""
+    its nine results, and whether they hold: in the safe window, with a
+    radial part whose length has all its bits (else the scalar path measures
+    it again)."""
     dx, dy, dz = px - cx, py - cy, pz - cz
     _, ok = window(dx, dy, dz, radius)
     h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
+    ok = ok & (not short_radial(qq, on_axis))
     res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     if not is_disk:

@@ -37,6 +37,16 @@ Two methods:
       plane, is a few ``eps * S`` however thin the triangle is; a wrong
       decision therefore costs at most that much.  The face distance is then
       ``|n . a| / |n|``, with ``n . a`` as a compensated dot product.
+    * The scaling above bounds the differences ``a, b, c``, not the edges,
+      and ``|n|^2`` is a fourth power of the edges: for a triangle about
+      ``2^-250`` times its distance from ``P`` or smaller, or a sliver
+      ``2^-500`` times as wide as that distance, it falls towards the
+      subnormal range, where it and the edge tests lose bits.  The face is a
+      candidate only where ``|n|^2 >= 2^-1000`` (:data:`NN_MIN`), so every
+      product of the face test that matters is a normal float.  Below, the
+      triangle is too thin for the face to matter: its inradius is at most
+      ``sqrt(|n|)``, below ``2^-250``, while ``S >= 2^-64`` where the test
+      runs, so the nearest edge is as near as the face within ``2^-186 S``.
     * Otherwise the minimum is over the three edges, each a clamped
       projection that never divides by zero (the segment's,
       :func:`.point_segment.project`): a degenerate triangle (collinear,
@@ -93,6 +103,11 @@ from ._loops import (
 from .features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 from .methods import CERTIFIED
 from .point_segment import project
+
+# The least square of the normal with which the face is a candidate (see the
+# module docstring): above it no term of the face test that matters is
+# subnormal; below it the triangle is thinner than its rounding.
+NN_MIN = 2.0**-1000
 
 # The feature codes as floats, for the SIMD loops, which keep them in float rows.
 F_NONE, F_FACE = float(NONE), float(FACE)
@@ -364,13 +379,13 @@ def _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz):
     e2x, e2y, e2z = cx - bx, cy - by, cz - bz
 
     # Face: the projection of P is inside when all three edge functions are
-    # positive, which needs a non-zero normal.
+    # positive, which needs a normal whose square is not near underflow.
     nx, ny, nz = cross_accurate(e0x, e0y, e0z, e1x, e1y, e1z)
     nn = nx * nx + ny * ny + nz * nz
     wc = edge_function(nx, ny, nz, ax, ay, az, e0x, e0y, e0z)
     wa = edge_function(nx, ny, nz, bx, by, bz, e2x, e2y, e2z)
     wb = -edge_function(nx, ny, nz, cx, cy, cz, e1x, e1y, e1z)
-    inside = (wa > 0.0) & (wb > 0.0) & (wc > 0.0)
+    inside = (wa > 0.0) & (wb > 0.0) & (wc > 0.0) & (nn >= NN_MIN)
     na = dot3_accurate(nx, ny, nz, ax, ay, az)
     nn_safe = max(nn, TINY)
     k = na / nn_safe
