@@ -215,3 +215,84 @@ def round_shape(is_disk, center, normal, radius, point, robust_point):
         x, y, z = robust_point
         feature = Feature.RIM
     return dist, sqr, x, y, z, int(feature), (not is_disk) and q2 == 0, height, radial
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _axpy(s, x, y):
+    """``y + s x``."""
+    return [yk + s * xk for xk, yk in zip(x, y, strict=True)]
+
+
+def _segment_segment(p0, p1, q0, q1):
+    """Exact segment-segment query on Fraction vectors.
+
+    The optimality conditions of the squared distance on the parameter
+    square, in code order of the feature pairs (those of the certified
+    method's filter, exactly): the first pair whose conditions hold holds a
+    closest pair, and it is the lowest that does.  Returns ``(sqr_distance,
+    point_a, point_b, feature_a, feature_b, s, t)``, all exact.
+    """
+    e, f = _sub(p1, p0), _sub(q1, q0)
+    w = {(i, j): _sub(q, p) for i, p in enumerate((p0, p1)) for j, q in enumerate((q0, q1))}
+    alpha = {ij: -_dot(w[ij], f) for ij in w}  # (A_i - B_j) . f
+    beta = {(j, i): _dot(w[i, j], e) for i, j in w}  # (B_j - A_i) . e
+    n = _cross(e, f)
+    h = [-_dot(n, _cross(w[i, 0], f)) for i in (0, 1)]  # -s |n|^2 and (1 - s) |n|^2 on the lines
+    k = [_dot(n, _cross(w[0, j], e)) for j in (0, 1)]  # t |n|^2 and -(1 - t) |n|^2
+    vertex, edge = (Feature.VERTEX0, Feature.VERTEX1), Feature.EDGE01
+    conditions = []
+    for i in (0, 1):
+        for j in (0, 1):
+            s_ok = beta[j, 0] <= 0 if i == 0 else beta[j, 1] >= 0
+            t_ok = alpha[i, 0] <= 0 if j == 0 else alpha[i, 1] >= 0
+            conditions.append(((vertex[i], vertex[j]), s_ok and t_ok))
+        on_b = alpha[i, 0] > 0 and alpha[i, 1] < 0
+        conditions.append(((vertex[i], edge), on_b and (h[0] >= 0 if i == 0 else h[1] <= 0)))
+    for j in (0, 1):
+        on_a = beta[j, 0] > 0 and beta[j, 1] < 0
+        conditions.append(((edge, vertex[j]), on_a and (k[0] <= 0 if j == 0 else k[1] >= 0)))
+    # Parallel lines (n = 0) never reach this: a lower pair holds then.
+    conditions.append(((edge, edge), h[0] < 0 < h[1] and k[1] < 0 < k[0]))
+    (fa, fb) = next(pair for pair, holds in sorted(conditions) if holds)
+    zero, one = Fraction(0), Fraction(1)
+    if fa == edge and fb == edge:
+        nn = _dot(n, n)
+        s, t = -h[0] / nn, k[0] / nn
+    elif fb == edge:
+        s = zero if fa == Feature.VERTEX0 else one
+        t = alpha[int(fa), 0] / _dot(f, f)
+    elif fa == edge:
+        s, t = beta[int(fb), 0] / _dot(e, e), zero if fb == Feature.VERTEX0 else one
+    else:
+        s, t = Fraction(int(fa)), Fraction(int(fb))
+    pa, pb = _axpy(s, e, p0), _axpy(t, f, q0)
+    return _dot(_sub(pa, pb), _sub(pa, pb)), pa, pb, fa, fb, s, t
+
+
+def _rational_rows(*arrays):
+    return [[[Fraction(float(c)) for c in row] for row in arr] for arr in arrays]
+
+
+def segment_segment(a, b):
+    """Exact segment-segment query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, s, t)`` with the distance faithfully rounded, the
+    rest correctly rounded, and the lowest feature pair that holds a closest
+    pair; a zero distance has one point as both witnesses.
+    """
+    (p0, p1), (q0, q1) = _rational_rows(a, b)
+    sqr, pa, pb, fa, fb, s, t = _segment_segment(p0, p1, q0, q1)
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x) for x in pa),
+        *(_float(x) for x in pb),
+        int(fa),
+        int(fb),
+        _float(s),
+        _float(t),
+    )

@@ -1,0 +1,393 @@
+"""The pair kernels (segment-segment, ...) against the exact reference.
+
+No facade exists for pairs yet, so the compiled scalar functions are called
+through small ``numba.njit`` batch loops.  For every pair of shapes:
+
+* ``robust`` is within ``16 eps S + 2^-1075`` of the exact distance ``d*``
+  (``S`` the largest coordinate difference between the shapes' vertices),
+  its witness points lie within that bound of their shapes and are ``d``
+  apart within it (plus the rounding of their own coordinates), its feature
+  pair holds points within the bound of ``d*``, and a zero distance has one
+  point as both witnesses;
+* ``certified``, wherever it answers CERTAIN, is within one ulp of ``d*``
+  with the exact lowest feature pair, and exactly 0 with one common point
+  where the shapes touch;
+* the exact fallback (``proximity._exact``) always is, with the reference's
+  witnesses correctly rounded.
+
+on seeded scenes of every pair family of ``proximity/testing/scenes.py``, on
+hypothesis-drawn ones, on one hand-made case per feature pair, and at both
+ends of the float range.
+"""
+
+from fractions import Fraction
+
+import mpmath
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from numba import literal_unroll, njit
+
+from proximity import _exact, certified, segment_segment
+from proximity.testing import exact, scenes
+from proximity.testing.exact import Feature
+from tests import strategies
+
+BOUND = 16
+"""The robust pair bound, in units of ``eps * S``."""
+
+HALF_SUBNORMAL = mpmath.mpf(2) ** -1075
+V0, V1, V2, E01, E12, E20, FACE = (Feature(code) for code in range(7))
+
+
+# -- compiled batch loops ------------------------------------------------------
+
+
+@njit
+def _store(out, i, row):
+    k = 0
+    for value in literal_unroll(row):
+        out[i, k] = value
+        k += 1
+
+
+@njit
+def _ss_robust(a, b):
+    out = np.empty((a.shape[0], 12))
+    for i in range(a.shape[0]):
+        p, q = a[i], b[i]
+        row = segment_segment.robust(
+            p[0, 0],
+            p[0, 1],
+            p[0, 2],
+            p[1, 0],
+            p[1, 1],
+            p[1, 2],
+            q[0, 0],
+            q[0, 1],
+            q[0, 2],
+            q[1, 0],
+            q[1, 1],
+            q[1, 2],
+        )
+        _store(out, i, row)
+    return out
+
+
+@njit
+def _ss_certified(a, b):
+    out = np.empty((a.shape[0], 13))
+    for i in range(a.shape[0]):
+        p, q = a[i], b[i]
+        row = segment_segment.certified(
+            p[0, 0],
+            p[0, 1],
+            p[0, 2],
+            p[1, 0],
+            p[1, 1],
+            p[1, 2],
+            q[0, 0],
+            q[0, 1],
+            q[0, 2],
+            q[1, 0],
+            q[1, 1],
+            q[1, 2],
+        )
+        _store(out, i, row)
+    return out
+
+
+class Spec:
+    """What the checks need to know of one pair of shapes."""
+
+    def __init__(self, robust, certified_, fallback, reference, sizes):
+        self.robust, self.certified, self.fallback, self.reference = robust, certified_, fallback, reference
+        self.sizes = sizes
+
+    def params(self, ref):
+        """The exact parameters of a reference answer, as the kernels' rows hold them:
+        ``s`` for a segment, the barycentric weights for a triangle."""
+        out = []
+        for weights in (ref.weights_a, ref.weights_b):
+            out += [weights[1]] if len(weights) == 2 else list(weights)
+        return out
+
+    def weights(self, params):
+        """Barycentric weights of each witness over its shape's vertices, from the row's parameters."""
+        ka, _ = self.sizes
+        if ka == 2:
+            wa, rest = (1.0 - params[0], params[0]), params[1:]
+        else:
+            wa, rest = tuple(params[:3]), params[3:]
+        wb = (1.0 - rest[0], rest[0]) if len(rest) == 1 else tuple(rest)
+        return wa, wb
+
+
+SPECS = {
+    "segment_segment": Spec(
+        _ss_robust, _ss_certified, _exact.segment_segment, exact.segment_segment_closest, (2, 2)
+    ),
+}
+
+
+def _batch(kernel, a, b):
+    return kernel(np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64))
+
+
+# -- checks ----------------------------------------------------------------------
+
+
+def _mpf(x):
+    return exact.to_mpf(Fraction(float(x)))
+
+
+def _slack(point):
+    """Rounding allowed for a witness stored as floats, as a distance: half an
+    ulp per coordinate, at least half the subnormal spacing."""
+    return exact.to_mpf(exact.EPS) * _mpf(np.max(np.abs(point))) + 2 * HALF_SUBNORMAL
+
+
+def _norm(u, v):
+    sqr = sum((Fraction(float(x)) - Fraction(float(y))) ** 2 for x, y in zip(u, v, strict=True))
+    with mpmath.workprec(exact.PREC):
+        return mpmath.sqrt(exact.to_mpf(sqr))
+
+
+def _to_shape(vertices, point):
+    """Exact distance from a point to a segment or triangle."""
+    v = np.asarray(vertices)
+    return exact.triangle_distance(v if len(v) == 3 else v[[0, 1, 1]], point)
+
+
+def _within(value, limit, what):
+    with mpmath.workprec(exact.PREC):
+        assert value <= limit, f"{what}: {mpmath.nstr(value, 6)} > allowed {mpmath.nstr(limit, 6)}"
+
+
+def _unpack(row):
+    """``(distance, sqr, pa, pb, fa, fb, params)`` of a robust row."""
+    return row[0], row[1], row[2:5], row[5:8], Feature(int(row[8])), Feature(int(row[9])), row[10:]
+
+
+def check_robust(spec, a, b, row, ref=None):
+    """Assert the robust contract for one pair; return the error in units of eps S."""
+    ref = spec.reference(a, b) if ref is None else ref
+    scale = exact.pair_scale(a, b)
+    context = f"a={np.asarray(a).tolist()!r}, b={np.asarray(b).tolist()!r}"
+    d, _, pa, pb, fa, fb, params = _unpack(row)
+    error = exact.error_in_units(float(d), ref.distance, scale)
+    with mpmath.workprec(exact.PREC):
+        unit = exact.to_mpf(exact.EPS) * exact.to_mpf(scale)
+        allowed = BOUND * unit + HALF_SUBNORMAL
+        _within(abs(_mpf(d) - ref.distance), allowed, f"distance error ({error:.3g} eps S), {context}")
+        _within(_to_shape(a, pa), allowed + _slack(pa), f"witness a off its shape, {context}")
+        _within(_to_shape(b, pb), allowed + _slack(pb), f"witness b off its shape, {context}")
+        _within(
+            abs(_norm(pa, pb) - _mpf(d)),
+            allowed + _slack(pa) + _slack(pb),
+            f"|pa - pb| != distance, {context}",
+        )
+        # The feature pair must hold points within the bound of the minimum.
+        closed = mpmath.sqrt(exact.to_mpf(ref.feature_sqr_distances[fa, fb]))
+        _within(closed - ref.distance, allowed, f"features {fa!r}, {fb!r} (exact {ref.features}), {context}")
+    if d == 0.0:
+        assert (pa == pb).all(), f"zero distance with distinct witnesses {pa}, {pb}, {context}"
+    for weights, feature, vertices, point in zip(
+        spec.weights(params), (fa, fb), (a, b), (pa, pb), strict=True
+    ):
+        w = np.asarray(weights)
+        assert (w >= 0).all() and abs(w.sum() - 1.0) <= 4e-16, f"weights {w} for {context}"
+        support = {i for i, x in enumerate(w) if x != 0.0}
+        assert support == set(exact._SUPPORT[feature]) or feature == FACE and support <= {0, 1, 2}, (
+            f"weights {w} do not match feature {feature!r}, {context}"
+        )
+        if feature <= V2:
+            assert (point == np.asarray(vertices)[int(feature)]).all(), f"vertex witness not exact, {context}"
+        if len(w) == 2:
+            # The point at the parameter s = w[1], exactly: 1 - s in float would
+            # lose the digits of a segment far from the origin.
+            p0, p1 = ([Fraction(float(x)) for x in v] for v in np.asarray(vertices))
+            s = Fraction(float(w[1]))
+            along = [x + s * (y - x) for x, y in zip(p0, p1, strict=True)]
+            _within(_norm(along, point), allowed + _slack(point), f"parameter off its witness, {context}")
+    return error
+
+
+def check_certified(spec, a, b, row, ref=None):
+    """Assert the certified contract where the row is CERTAIN; return whether it was."""
+    if row[0] != certified.CERTAIN:
+        assert row[0] == certified.EXACT
+        return False
+    ref = spec.reference(a, b) if ref is None else ref
+    context = f"a={np.asarray(a).tolist()!r}, b={np.asarray(b).tolist()!r}"
+    d, _, pa, pb, fa, fb, _ = _unpack(row[1:])
+    assert exact.ulps(float(d), ref.distance) < 1.0, f"{d!r} vs {float(ref.distance)!r}, {context}"
+    assert (fa, fb) == (ref.feature_a, ref.feature_b), f"{fa!r}, {fb!r} vs exact {ref.features}, {context}"
+    if ref.sqr_distance == 0:
+        assert d == 0.0 and (pa == pb).all(), context
+    check_robust(spec, a, b, row[1:], ref)
+    return True
+
+
+def check_fallback(spec, a, b, ref=None):
+    """Assert the exact fallback's answer: faithful, the lowest features, correctly rounded witnesses."""
+    ref = spec.reference(a, b) if ref is None else ref
+    context = f"a={np.asarray(a).tolist()!r}, b={np.asarray(b).tolist()!r}"
+    d, sqr, pa, pb, fa, fb, params = _unpack(np.array(spec.fallback(a, b), dtype=np.float64))
+    assert exact.ulps(float(d), ref.distance) < 1.0, context
+    assert sqr == _exact._float(ref.sqr_distance), context
+    assert (fa, fb) == (ref.feature_a, ref.feature_b), f"{fa!r}, {fb!r} vs exact {ref.features}, {context}"
+    assert pa.tolist() == [_exact._float(x) for x in ref.point_a], context
+    assert pb.tolist() == [_exact._float(x) for x in ref.point_b], context
+    assert params.tolist() == [_exact._float(x) for x in spec.params(ref)], context
+
+
+def check_scene(spec, a, b, fallback=True):
+    """Every check on a batch of pairs; returns the worst robust error and the fallback count."""
+    robust = _batch(spec.robust, a, b)
+    cert = _batch(spec.certified, a, b)
+    worst, undecided = 0.0, 0
+    for k in range(len(a)):
+        ref = spec.reference(a[k], b[k])
+        worst = max(worst, check_robust(spec, a[k], b[k], robust[k], ref))
+        undecided += not check_certified(spec, a[k], b[k], cert[k], ref)
+        if fallback:
+            check_fallback(spec, a[k], b[k], ref)
+    return worst, undecided
+
+
+# -- every family ------------------------------------------------------------------
+
+FAMILY_CASES = [
+    pytest.param(pair, family, id=f"{pair}-{family.label}")
+    for pair in SPECS
+    for family in scenes.PAIR_FAMILIES[pair]
+]
+
+
+@pytest.mark.parametrize(("pair", "family"), FAMILY_CASES)
+def test_every_family(pair, family):
+    scene = family(np.random.default_rng(2024), 40)
+    check_scene(SPECS[pair], scene.a, scene.b)
+
+
+@pytest.mark.parametrize("pair", sorted(SPECS))
+def test_hypothesis_drawn_scenes(pair):
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(strategies.PAIR_FAMILIES[pair])
+    def check(scene):
+        check_scene(SPECS[pair], scene.a, scene.b)
+
+    check()
+
+
+@pytest.mark.parametrize("pair", sorted(SPECS))
+def test_the_fallback_is_rare_on_well_conditioned_pairs(pair):
+    """Seeded: fewer than 1 in 1,000 certified queries needs exact arithmetic."""
+    scene = scenes.pair_well_conditioned(np.random.default_rng(7), 100_000, pair)
+    status = _batch(SPECS[pair].certified, scene.a, scene.b)[:, 0]
+    assert np.count_nonzero(status != certified.CERTAIN) < 100
+
+
+# -- segment-segment: one case per feature pair ----------------------------------------
+
+A = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]]
+
+# (segment b, sqr_distance, feature pair, witness on a, witness on b)
+SEGMENT_CASES = [
+    ([[-1, -2, 0], [-3, -2, 0]], 5, (V0, V0), [0, 0, 0], [-1, -2, 0]),
+    ([[-3, -2, 0], [-1, -2, 0]], 5, (V0, V1), [0, 0, 0], [-1, -2, 0]),
+    ([[-1, -2, 0], [-1, 2, 0]], 1, (V0, E01), [0, 0, 0], [-1, 0, 0]),
+    ([[5, -2, 0], [7, -2, 0]], 5, (V1, V0), [4, 0, 0], [5, -2, 0]),
+    ([[7, -2, 0], [5, -2, 0]], 5, (V1, V1), [4, 0, 0], [5, -2, 0]),
+    ([[5, -2, 0], [5, 2, 0]], 1, (V1, E01), [4, 0, 0], [5, 0, 0]),
+    ([[2, -2, 0], [2, -5, 0]], 4, (E01, V0), [2, 0, 0], [2, -2, 0]),
+    ([[2, -5, 0], [2, -2, 0]], 4, (E01, V1), [2, 0, 0], [2, -2, 0]),
+    ([[2, -2, 3], [2, 2, 3]], 9, (E01, E01), [2, 0, 0], [2, 0, 3]),
+    # Crossing: zero, one common point.
+    ([[2, -2, 0], [2, 2, 0]], 0, (E01, E01), [2, 0, 0], [2, 0, 0]),
+    # Parallel: ties along the overlap go to the lowest pair, A1 over b's edge.
+    ([[1, 1, 0], [6, 1, 0]], 1, (V1, E01), [4, 0, 0], [4, 1, 0]),
+    ([[6, 1, 0], [1, 1, 0]], 1, (V1, E01), [4, 0, 0], [4, 1, 0]),
+    ([[-1, 1, 0], [6, 1, 0]], 1, (V0, E01), [0, 0, 0], [0, 1, 0]),
+    ([[1, 1, 0], [3, 1, 0]], 1, (E01, V0), [1, 0, 0], [1, 1, 0]),
+    # Collinear: overlapping (zero), then apart (vertex to vertex).
+    ([[1, 0, 0], [6, 0, 0]], 0, (V1, E01), [4, 0, 0], [4, 0, 0]),
+    ([[6, 0, 0], [9, 0, 0]], 4, (V1, V0), [4, 0, 0], [6, 0, 0]),
+    # Degenerate: b a point, on a and off it; both points.
+    ([[1, 3, 0], [1, 3, 0]], 9, (E01, V0), [1, 0, 0], [1, 3, 0]),
+    ([[1, 0, 0], [1, 0, 0]], 0, (E01, V0), [1, 0, 0], [1, 0, 0]),
+    ([[4, 0, 0], [4, 0, 0]], 0, (V1, V0), [4, 0, 0], [4, 0, 0]),
+]
+
+
+def _axes_and_shift(points, order, shift):
+    return (np.asarray(points, dtype=np.float64)[:, order] + shift).tolist()
+
+
+@pytest.mark.parametrize(("b", "sqr", "pair", "pa", "pb"), SEGMENT_CASES)
+@pytest.mark.parametrize("motion", [((0, 1, 2), 0.0), ((2, 0, 1), 8.0), ((1, 2, 0), -0.5)])
+def test_segment_segment_cases(b, sqr, pair, pa, pb, motion):
+    """Exact answers, moved by an axis permutation and a dyadic shift (both exact)."""
+    order, shift = motion
+    a, b = _axes_and_shift(A, order, shift), _axes_and_shift(b, order, shift)
+    pa, pb = _axes_and_shift([pa], order, shift)[0], _axes_and_shift([pb], order, shift)[0]
+    spec = SPECS["segment_segment"]
+    ref = spec.reference(a, b)
+    assert ref.sqr_distance == sqr and (ref.feature_a, ref.feature_b) == pair
+    assert [float(x) for x in ref.point_a] == pa and [float(x) for x in ref.point_b] == pb
+    robust = _batch(spec.robust, [a], [b])[0]
+    check_robust(spec, a, b, robust, ref)
+    check_fallback(spec, a, b, ref)
+    cert = _batch(spec.certified, [a], [b])[0]
+    check_certified(spec, a, b, cert, ref)
+    # Where the minimum is unique and not zero, the filter decides it.
+    unique = len(ref.features) == 1 and sqr != 0 and np.ptp(np.asarray(b), axis=0).any()
+    assert cert[0] == certified.CERTAIN or not unique
+    # Swapping the shapes swaps the features.
+    swapped = _batch(spec.robust, [b], [a])[0]
+    check_robust(spec, b, a, swapped)
+
+
+# -- both ends of the float range ---------------------------------------------------
+
+
+@pytest.mark.parametrize("pair", sorted(SPECS))
+@pytest.mark.parametrize(
+    ("size", "offset"),
+    [
+        (1.0, 2.0**1020),  # far apart: the distance near the largest floats
+        (2.0**1020, 2.0**1021),  # huge shapes
+        (2.0**-1060, 2.0**-1060),  # subnormal coordinates
+        (2.0**-1000, 2.0**-1070),  # subnormal gaps between normal shapes
+        (1e-3, 1e308),  # small shapes next to the largest floats (distances below them)
+    ],
+)
+def test_both_ends_of_the_float_range(pair, size, offset):
+    spec = SPECS[pair]
+    rng = np.random.default_rng(5)
+    ka, kb = spec.sizes
+    a = rng.uniform(-1, 1, (20, ka, 3)) * size
+    b = rng.uniform(-1, 1, (20, kb, 3)) * size + rng.uniform(-1, 1, (20, 1, 3)) * offset
+    check_scene(spec, a, b)
+
+
+@pytest.mark.parametrize("pair", sorted(SPECS))
+def test_differences_that_overflow(pair):
+    """Coordinates of both signs near the float limit: their differences overflow, the distance does not."""
+    spec = SPECS[pair]
+    rng = np.random.default_rng(6)
+    ka, kb = spec.sizes
+    top = 1.7e308
+    a = rng.uniform(-1, 1, (20, ka, 3)) * top
+    b = rng.uniform(-1, 1, (20, kb, 3)) * top
+    robust = _batch(spec.robust, a, b)
+    for k in range(len(a)):
+        ref = spec.reference(a[k], b[k])
+        if ref.distance < top:
+            check_robust(spec, a[k], b[k], robust[k], ref)
+            check_fallback(spec, a[k], b[k], ref)
+        cert = _batch(spec.certified, a[k : k + 1], b[k : k + 1])[0]
+        assert (
+            cert[0] == certified.EXACT or ref.distance < top and check_certified(spec, a[k], b[k], cert, ref)
+        )
