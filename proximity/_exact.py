@@ -120,15 +120,9 @@ def _seed_region(d, a, b, c, e):
     return s, one - s
 
 
-def triangle(vertices, point):
-    """Exact point-triangle query for 3D float inputs.
-
-    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with the
-    distance faithfully rounded, the rest correctly rounded, and the feature
-    the lowest-coded one whose relative interior holds the closest point.
-    """
-    v = [[Fraction(float(c)) for c in row] for row in vertices]
-    p = [Fraction(float(c)) for c in point]
+def _triangle(v, p):
+    """Exact point-triangle query on Fraction vectors: ``(sqr_distance,
+    closest, feature, barycentric)``, all exact; see :func:`triangle`."""
     e0, e1 = _sub(v[1], v[0]), _sub(v[2], v[0])
     a, b, c = _dot(e0, e0), _dot(e0, e1), _dot(e1, e1)
     dvec = _sub(v[0], p)
@@ -166,6 +160,19 @@ def triangle(vertices, point):
                 break
         if bary is None:
             bary = [1 - s - t, s, t]
+    return sqr, closest, Feature(feature), bary
+
+
+def triangle(vertices, point):
+    """Exact point-triangle query for 3D float inputs.
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with the
+    distance faithfully rounded, the rest correctly rounded, and the feature
+    the lowest-coded one whose relative interior holds the closest point.
+    """
+    v = [[Fraction(float(c)) for c in row] for row in vertices]
+    p = [Fraction(float(c)) for c in point]
+    sqr, closest, feature, bary = _triangle(v, p)
     return (
         faithful_sqrt(sqr),
         _float(sqr),
@@ -295,4 +302,64 @@ def segment_segment(a, b):
         int(fb),
         _float(s),
         _float(t),
+    )
+
+
+_TRIANGLE_EDGES = ((Feature.EDGE01, 0, 1), (Feature.EDGE12, 1, 2), (Feature.EDGE20, 2, 0))
+
+
+def _segment_triangle(p0, p1, v):
+    """Exact segment-triangle query on Fraction vectors.
+
+    The minimum over the document's sub-queries, each exact: each endpoint
+    against the triangle, the segment against each edge, and the segment
+    crossing the open face.  Every feature pair but a parallel edge-face
+    pair (never the lowest that holds a closest pair) belongs to one of
+    them, and each returns its lowest, so the lowest ``(sqr_distance,
+    pair)`` over them is the answer.  Returns ``(sqr_distance, point_a,
+    point_b, feature_a, feature_b, s, barycentric)``, all exact.
+    """
+    zero = Fraction(0)
+    candidates = []
+    for i, p in enumerate((p0, p1)):
+        sqr, closest, feature, bary = _triangle(v, p)
+        candidates.append((sqr, (Feature(i), feature), p, closest, Fraction(i), bary))
+    for code, j, k in _TRIANGLE_EDGES:
+        sqr, pa, pb, fa, fb, s, t = _segment_segment(p0, p1, v[j], v[k])
+        bary = [zero] * 3
+        bary[j], bary[k] = 1 - t, t
+        feature = code if fb == Feature.EDGE01 else Feature(j if fb == Feature.VERTEX0 else k)
+        candidates.append((sqr, (fa, feature), pa, pb, s, bary))
+    e = _sub(p1, p0)
+    n = _cross(_sub(v[1], v[0]), _sub(v[2], v[0]))
+    nn = _dot(n, n)
+    h0, h1 = _dot(n, _sub(p0, v[0])), _dot(n, _sub(p1, v[0]))
+    if nn != 0 and h0 * h1 < 0:
+        s = h0 / (h0 - h1)
+        x = _axpy(s, e, p0)
+        bary = [_dot(n, _cross(_sub(v[(k + 1) % 3], x), _sub(v[(k + 2) % 3], x))) / nn for k in range(3)]
+        if all(b > 0 for b in bary):
+            candidates.append((zero, (Feature.EDGE01, Feature.FACE), x, x, s, bary))
+    sqr, (fa, fb), pa, pb, s, bary = min(candidates, key=lambda c: (c[0], c[1]))
+    return sqr, pa, pb, fa, fb, s, bary
+
+
+def segment_triangle(segment, triangle):
+    """Exact segment-triangle query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, s, b0, b1, b2)`` as :func:`segment_segment` does,
+    with the triangle witness's barycentric coordinates.
+    """
+    (p0, p1), v = _rational_rows(segment, triangle)
+    sqr, pa, pb, fa, fb, s, bary = _segment_triangle(p0, p1, v)
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x) for x in pa),
+        *(_float(x) for x in pb),
+        int(fa),
+        int(fb),
+        _float(s),
+        *(_float(w) for w in bary),
     )
