@@ -363,3 +363,60 @@ def segment_triangle(segment, triangle):
         _float(s),
         *(_float(w) for w in bary),
     )
+
+
+def _edge_weights(i, j, s):
+    """Barycentric weights of the point at parameter ``s`` from vertex ``i`` to vertex ``j``."""
+    weights = [Fraction(0)] * 3
+    weights[i], weights[j] = 1 - s, s
+    return weights
+
+
+def _edge_feature(code, i, j, feature):
+    """A triangle's feature for a segment feature of its edge ``code`` from vertex ``i`` to ``j``."""
+    if feature == Feature.EDGE01:
+        return code
+    return Feature(i if feature == Feature.VERTEX0 else j)
+
+
+def _triangle_triangle(a, b):
+    """Exact triangle-triangle query on Fraction vectors.
+
+    The least of the six exact segment-triangle queries of each edge of one
+    triangle against the other: every feature pair but two faces (never the
+    lowest that holds a closest pair) belongs to one of them, and each
+    returns its lowest.  Returns ``(sqr_distance, point_a, point_b,
+    feature_a, feature_b, barycentric_a, barycentric_b)``, all exact.
+    """
+    candidates = []
+    for code, i, j in _TRIANGLE_EDGES:
+        sqr, pa, pb, fa, fb, s, bary = _segment_triangle(a[i], a[j], b)
+        pair = (_edge_feature(code, i, j, fa), fb)
+        candidates.append((sqr, pair, pa, pb, _edge_weights(i, j, s), bary))
+    for code, i, j in _TRIANGLE_EDGES:
+        sqr, pb, pa, fb, fa, s, bary = _segment_triangle(b[i], b[j], a)
+        pair = (fa, _edge_feature(code, i, j, fb))
+        candidates.append((sqr, pair, pa, pb, bary, _edge_weights(i, j, s)))
+    sqr, (fa, fb), pa, pb, bary_a, bary_b = min(candidates, key=lambda c: (c[0], c[1]))
+    return sqr, pa, pb, fa, fb, bary_a, bary_b
+
+
+def triangle_triangle(a, b):
+    """Exact triangle-triangle query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, a0, a1, a2, b0, b1, b2)`` as :func:`segment_segment`
+    does, with both witnesses' barycentric coordinates.
+    """
+    va, vb = _rational_rows(a, b)
+    sqr, pa, pb, fa, fb, bary_a, bary_b = _triangle_triangle(va, vb)
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x) for x in pa),
+        *(_float(x) for x in pb),
+        int(fa),
+        int(fb),
+        *(_float(w) for w in bary_a),
+        *(_float(w) for w in bary_b),
+    )

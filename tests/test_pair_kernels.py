@@ -28,7 +28,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from numba import literal_unroll, njit
 
-from proximity import _exact, certified, segment_segment, segment_triangle
+from proximity import _exact, certified, segment_segment, segment_triangle, triangle_triangle
 from proximity.testing import exact, scenes
 from proximity.testing.exact import Feature
 from tests import strategies
@@ -123,6 +123,32 @@ def _st_certified(a, b):
     return out
 
 
+@njit
+def _tt_robust(a, b):
+    out = np.empty((a.shape[0], 16))
+    for i in range(a.shape[0]):
+        p, q = a[i], b[i]
+        row = triangle_triangle.robust(
+            p[0, 0], p[0, 1], p[0, 2], p[1, 0], p[1, 1], p[1, 2], p[2, 0], p[2, 1], p[2, 2],
+            q[0, 0], q[0, 1], q[0, 2], q[1, 0], q[1, 1], q[1, 2], q[2, 0], q[2, 1], q[2, 2],
+        )  # fmt: skip
+        _store(out, i, row)
+    return out
+
+
+@njit
+def _tt_certified(a, b):
+    out = np.empty((a.shape[0], 17))
+    for i in range(a.shape[0]):
+        p, q = a[i], b[i]
+        row = triangle_triangle.certified(
+            p[0, 0], p[0, 1], p[0, 2], p[1, 0], p[1, 1], p[1, 2], p[2, 0], p[2, 1], p[2, 2],
+            q[0, 0], q[0, 1], q[0, 2], q[1, 0], q[1, 1], q[1, 2], q[2, 0], q[2, 1], q[2, 2],
+        )  # fmt: skip
+        _store(out, i, row)
+    return out
+
+
 class Spec:
     """What the checks need to know of one pair of shapes."""
 
@@ -155,6 +181,9 @@ SPECS = {
     ),
     "segment_triangle": Spec(
         _st_robust, _st_certified, _exact.segment_triangle, exact.segment_triangle_closest, (2, 3)
+    ),
+    "triangle_triangle": Spec(
+        _tt_robust, _tt_certified, _exact.triangle_triangle, exact.triangle_triangle_closest, (3, 3)
     ),
 }
 
