@@ -77,7 +77,7 @@ def _on_open_segment(x, a, b):
     ee = _dot(e, e)
     if ee == 0:
         return False
-    t = _dot(_sub(x, a), e) / ee
+    t = Fraction(_dot(_sub(x, a), e), ee)
     return 0 < t < 1 and all(a[i] + t * e[i] == x[i] for i in range(len(x)))
 
 
@@ -90,33 +90,33 @@ def _seed_region(d, a, b, c, e):
     if s + t <= det:
         if s < 0 and t < 0:  # region 4
             if d < 0:
-                return (one if -d >= a else -d / a), zero
-            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+                return (one if -d >= a else Fraction(-d, a)), zero
+            return zero, (zero if e >= 0 else one if -e >= c else Fraction(-e, c))
         if s < 0:  # region 3
-            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+            return zero, (zero if e >= 0 else one if -e >= c else Fraction(-e, c))
         if t < 0:  # region 5
-            return (zero if d >= 0 else one if -d >= a else -d / a), zero
-        return s / det, t / det  # region 0
+            return (zero if d >= 0 else one if -d >= a else Fraction(-d, a)), zero
+        return Fraction(s, det), Fraction(t, det)  # region 0
     if s < 0:  # region 2
         tmp0, tmp1 = b + d, c + e
         if tmp1 > tmp0:
             numer, denom = tmp1 - tmp0, a - 2 * b + c
-            s = one if numer >= denom else numer / denom
+            s = one if numer >= denom else Fraction(numer, denom)
             return s, one - s
-        return zero, (one if tmp1 <= 0 else zero if e >= 0 else -e / c)
+        return zero, (one if tmp1 <= 0 else zero if e >= 0 else Fraction(-e, c))
     if t < 0:  # region 6
         tmp0, tmp1 = b + e, a + d
         if tmp1 > tmp0:
             numer, denom = tmp1 - tmp0, a - 2 * b + c
-            t = one if numer >= denom else numer / denom
+            t = one if numer >= denom else Fraction(numer, denom)
             return one - t, t
-        return (one if tmp1 <= 0 else zero if d >= 0 else -d / a), zero
+        return (one if tmp1 <= 0 else zero if d >= 0 else Fraction(-d, a)), zero
     numer = (c + e) - (b + d)  # region 1
     if numer <= 0:
         s = zero
     else:
         denom = a - 2 * b + c
-        s = one if numer >= denom else numer / denom
+        s = one if numer >= denom else Fraction(numer, denom)
     return s, one - s
 
 
@@ -136,7 +136,11 @@ def _triangle(v, p):
         for i, j in ((0, 1), (1, 2), (2, 0)):
             edge = _sub(v[j], v[i])
             ee = _dot(edge, edge)
-            u = min(max(_dot(_sub(p, v[i]), edge) / ee, Fraction(0)), Fraction(1)) if ee else Fraction(0)
+            u = (
+                min(max(Fraction(_dot(_sub(p, v[i]), edge), ee), Fraction(0)), Fraction(1))
+                if ee
+                else Fraction(0)
+            )
             x = [v[i][k] + u * edge[k] for k in range(3)]
             dist2 = _dot(_sub(x, p), _sub(x, p))
             if best is None or dist2 < best[0]:
@@ -154,7 +158,7 @@ def _triangle(v, p):
         for code, (i, j) in ((Feature.EDGE01, (0, 1)), (Feature.EDGE12, (1, 2)), (Feature.EDGE20, (2, 0))):
             if _on_open_segment(closest, v[i], v[j]):
                 edge = _sub(v[j], v[i])
-                u = _dot(_sub(closest, v[i]), edge) / _dot(edge, edge)
+                u = Fraction(_dot(_sub(closest, v[i]), edge), _dot(edge, edge))
                 feature, bary = code, [zero] * 3
                 bary[i], bary[j] = 1 - u, u
                 break
@@ -170,13 +174,13 @@ def triangle(vertices, point):
     distance faithfully rounded, the rest correctly rounded, and the feature
     the lowest-coded one whose relative interior holds the closest point.
     """
-    v = [[Fraction(float(c)) for c in row] for row in vertices]
-    p = [Fraction(float(c)) for c in point]
+    (v, (p,)), unit = _grid(vertices, [point])
     sqr, closest, feature, bary = _triangle(v, p)
+    sqr *= unit * unit
     return (
         faithful_sqrt(sqr),
         _float(sqr),
-        *(_float(x) for x in closest),
+        *(_float(x * unit) for x in closest),
         int(feature),
         *(_float(w) for w in bary),
     )
@@ -267,20 +271,32 @@ def _segment_segment(p0, p1, q0, q1):
     zero, one = Fraction(0), Fraction(1)
     if fa == edge and fb == edge:
         nn = _dot(n, n)
-        s, t = -h[0] / nn, k[0] / nn
+        s, t = Fraction(-h[0], nn), Fraction(k[0], nn)
     elif fb == edge:
         s = zero if fa == Feature.VERTEX0 else one
-        t = alpha[int(fa), 0] / _dot(f, f)
+        t = Fraction(alpha[int(fa), 0], _dot(f, f))
     elif fa == edge:
-        s, t = beta[int(fb), 0] / _dot(e, e), zero if fb == Feature.VERTEX0 else one
+        s, t = Fraction(beta[int(fb), 0], _dot(e, e)), zero if fb == Feature.VERTEX0 else one
     else:
         s, t = Fraction(int(fa)), Fraction(int(fb))
     pa, pb = _axpy(s, e, p0), _axpy(t, f, q0)
     return _dot(_sub(pa, pb), _sub(pa, pb)), pa, pb, fa, fb, s, t
 
 
-def _rational_rows(*arrays):
-    return [[[Fraction(float(c)) for c in row] for row in arr] for arr in arrays]
+def _grid(*arrays):
+    """Float arrays (of rows) as integers times one power of two: ``(rows,
+    unit)`` with every value ``rows[..] * unit``, exactly.
+
+    The queries then multiply integers, and form a Fraction only where they
+    divide, which makes the exact arithmetic several times faster.
+    """
+    values = [[[Fraction(float(c)) for c in row] for row in arr] for arr in arrays]
+    shift = max(x.denominator.bit_length() - 1 for arr in values for row in arr for x in row)
+    rows = [
+        [[x.numerator << (shift - x.denominator.bit_length() + 1) for x in row] for row in arr]
+        for arr in values
+    ]
+    return rows, Fraction(1, 1 << shift)
 
 
 def segment_segment(a, b):
@@ -291,13 +307,14 @@ def segment_segment(a, b):
     rest correctly rounded, and the lowest feature pair that holds a closest
     pair; a zero distance has one point as both witnesses.
     """
-    (p0, p1), (q0, q1) = _rational_rows(a, b)
+    ((p0, p1), (q0, q1)), unit = _grid(a, b)
     sqr, pa, pb, fa, fb, s, t = _segment_segment(p0, p1, q0, q1)
+    sqr *= unit * unit
     return (
         faithful_sqrt(sqr),
         _float(sqr),
-        *(_float(x) for x in pa),
-        *(_float(x) for x in pb),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
         int(fa),
         int(fb),
         _float(s),
@@ -335,9 +352,11 @@ def _segment_triangle(p0, p1, v):
     nn = _dot(n, n)
     h0, h1 = _dot(n, _sub(p0, v[0])), _dot(n, _sub(p1, v[0]))
     if nn != 0 and h0 * h1 < 0:
-        s = h0 / (h0 - h1)
+        s = Fraction(h0, h0 - h1)
         x = _axpy(s, e, p0)
-        bary = [_dot(n, _cross(_sub(v[(k + 1) % 3], x), _sub(v[(k + 2) % 3], x))) / nn for k in range(3)]
+        bary = [
+            Fraction(_dot(n, _cross(_sub(v[(k + 1) % 3], x), _sub(v[(k + 2) % 3], x))), nn) for k in range(3)
+        ]
         if all(b > 0 for b in bary):
             candidates.append((zero, (Feature.EDGE01, Feature.FACE), x, x, s, bary))
     sqr, (fa, fb), pa, pb, s, bary = min(candidates, key=lambda c: (c[0], c[1]))
@@ -351,13 +370,14 @@ def segment_triangle(segment, triangle):
     feature_a, feature_b, s, b0, b1, b2)`` as :func:`segment_segment` does,
     with the triangle witness's barycentric coordinates.
     """
-    (p0, p1), v = _rational_rows(segment, triangle)
+    ((p0, p1), v), unit = _grid(segment, triangle)
     sqr, pa, pb, fa, fb, s, bary = _segment_triangle(p0, p1, v)
+    sqr *= unit * unit
     return (
         faithful_sqrt(sqr),
         _float(sqr),
-        *(_float(x) for x in pa),
-        *(_float(x) for x in pb),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
         int(fa),
         int(fb),
         _float(s),
@@ -408,13 +428,14 @@ def triangle_triangle(a, b):
     feature_a, feature_b, a0, a1, a2, b0, b1, b2)`` as :func:`segment_segment`
     does, with both witnesses' barycentric coordinates.
     """
-    va, vb = _rational_rows(a, b)
+    (va, vb), unit = _grid(a, b)
     sqr, pa, pb, fa, fb, bary_a, bary_b = _triangle_triangle(va, vb)
+    sqr *= unit * unit
     return (
         faithful_sqrt(sqr),
         _float(sqr),
-        *(_float(x) for x in pa),
-        *(_float(x) for x in pb),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
         int(fa),
         int(fb),
         *(_float(w) for w in bary_a),

@@ -29,6 +29,7 @@ from hypothesis import HealthCheck, given, settings
 from numba import literal_unroll, njit
 
 from proximity import _exact, certified, segment_segment, segment_triangle, triangle_triangle
+from proximity._jit import specialize
 from proximity.testing import exact, scenes
 from proximity.testing.exact import Feature
 from tests import strategies
@@ -51,7 +52,6 @@ def _store(out, i, row):
         k += 1
 
 
-@njit
 def _ss_robust(a, b):
     out = np.empty((a.shape[0], 12))
     for i in range(a.shape[0]):
@@ -74,7 +74,6 @@ def _ss_robust(a, b):
     return out
 
 
-@njit
 def _ss_certified(a, b):
     out = np.empty((a.shape[0], 13))
     for i in range(a.shape[0]):
@@ -97,7 +96,6 @@ def _ss_certified(a, b):
     return out
 
 
-@njit
 def _st_robust(a, b):
     out = np.empty((a.shape[0], 14))
     for i in range(a.shape[0]):
@@ -110,7 +108,6 @@ def _st_robust(a, b):
     return out
 
 
-@njit
 def _st_certified(a, b):
     out = np.empty((a.shape[0], 15))
     for i in range(a.shape[0]):
@@ -123,7 +120,6 @@ def _st_certified(a, b):
     return out
 
 
-@njit
 def _tt_robust(a, b):
     out = np.empty((a.shape[0], 16))
     for i in range(a.shape[0]):
@@ -136,7 +132,6 @@ def _tt_robust(a, b):
     return out
 
 
-@njit
 def _tt_certified(a, b):
     out = np.empty((a.shape[0], 17))
     for i in range(a.shape[0]):
@@ -147,6 +142,15 @@ def _tt_certified(a, b):
         )  # fmt: skip
         _store(out, i, row)
     return out
+
+
+# Cached on disk like the library's kernels (the name carries a stamp of
+# proximity's sources, so an edit compiles them again): compiling the pair
+# kernels costs more than all the checks of a warm run.
+_ss_robust, _ss_certified, _st_robust, _st_certified, _tt_robust, _tt_certified = (
+    specialize(loop, "pair-kernels-test")
+    for loop in (_ss_robust, _ss_certified, _st_robust, _st_certified, _tt_robust, _tt_certified)
+)
 
 
 class Spec:
@@ -323,15 +327,20 @@ FAMILY_CASES = [
 ]
 
 
+# Queries per family and hypothesis examples per pair: the exact reference
+# and fallback of two triangles cost tens of milliseconds a query.
+VOLUME = {"segment_segment": (40, 60), "segment_triangle": (30, 40), "triangle_triangle": (16, 25)}
+
+
 @pytest.mark.parametrize(("pair", "family"), FAMILY_CASES)
 def test_every_family(pair, family):
-    scene = family(np.random.default_rng(2024), 40)
+    scene = family(np.random.default_rng(2024), VOLUME[pair][0])
     check_scene(SPECS[pair], scene.a, scene.b)
 
 
 @pytest.mark.parametrize("pair", sorted(SPECS))
 def test_hypothesis_drawn_scenes(pair):
-    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @settings(max_examples=VOLUME[pair][1], deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(strategies.PAIR_FAMILIES[pair])
     def check(scene):
         check_scene(SPECS[pair], scene.a, scene.b)
