@@ -787,11 +787,15 @@ def pair_parallel(rng: np.random.Generator, n: int, pair: str, kind: str) -> Pai
         s d`` of shape a's ``[p, p + d]`` (``"touching"``: the same line) or
         on that line moved by a grid vector (``"apart"``), with ``d`` on the
         2**-20 grid and ``c0, c1`` multiples of 1/16 in [-2, 3]: exactly
-        parallel, overlapping or not.  A triangle has one such edge (its
-        third vertex random, off the line) for a segment, and for two
-        triangles both lie in planes ``x[k] = c`` and ``x[k] = c + h`` of a
-        random axis (``h = 0`` for ``"touching"``), with vertices on the
-        2**-20 grid: coplanar triangles overlap in an area, or not.
+        parallel, overlapping or not.  Against a segment, half the triangles
+        have one such edge (the third vertex random, off the line); the
+        other half are ``(p, p + u, p + v)`` with ``u, v`` on the grid and
+        the segment from ``p + h m + alpha u + beta v`` along ``gamma u +
+        delta v`` (multiples of 1/16; ``m`` on the grid, ``h = 0`` for
+        ``"touching"``): parallel to the face in a generic orientation,
+        above it or beside it.  Two triangles both lie
+        in such planes, coplanar or apart, with vertices on the 2**-20 grid:
+        they overlap in an area, or not.
     """
     ka, kb = _pair_sizes(pair)
     if kind not in ("touching", "apart"):
@@ -816,6 +820,19 @@ def pair_parallel(rng: np.random.Generator, n: int, pair: str, kind: str) -> Pai
     b = np.stack([p + shift + c[:, :1] * d, p + shift + c[:, 1:] * d], axis=1)
     if kb == 3:
         b = np.concatenate([b, (p + rng.standard_normal((n, 3)))[:, None]], axis=1)
+        # Half: the triangle (V0, V0 + u, V0 + v), the segment from V0 + h m +
+        # alpha u + beta v along gamma u + delta v: exactly parallel to the
+        # face (h = 0: in its plane), in a generic orientation, so that equal
+        # distances to the face round differently.
+        flat = rng.random(n) < 0.5
+        u, v, m = _dyadic(rng, (3, n, 3), 20)
+        alpha, beta, gamma, delta = rng.integers(-16, 33, (4, n, 1)) / 16.0
+        h = 1.0 if apart else 0.0
+        tri = np.stack([p, p + u, p + v], axis=1)
+        start = p + h * m + alpha * u + beta * v
+        seg = np.stack([start, start + gamma * u + delta * v], axis=1)
+        a = np.where(flat[:, None, None], seg, a)
+        b = np.where(flat[:, None, None], tri, b)
     return PairScene(a, _shuffle_rows(rng, b))
 
 
