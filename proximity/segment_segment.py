@@ -275,6 +275,22 @@ def robust(a0x, a0y, a0z, a1x, a1y, a1z, b0x, b0y, b0z, b1x, b1y, b1z):
     return _finish(_robust_local(e, f, w00, w01, w10, w11), g, *args)
 
 
+@inline
+def robust_unscaled(a0x, a0y, a0z, a1x, a1y, a1z, b0x, b0y, b0z, b1x, b1y, b1z):
+    """:func:`robust` without its scaling, for the SIMD pass of a batch loop.
+
+    Returns ``(in_window, distance, ...)``: the fields of :func:`robust`,
+    bit for bit its answer where ``in_window`` (the largest difference is
+    within ``[2^-64, 2^64]``); elsewhere they are to be recomputed with
+    :func:`robust`.  Branch-free: a loop of these compiles to SIMD code.
+    """
+    args = (a0x, a0y, a0z, a1x, a1y, a1z, b0x, b0y, b0z, b1x, b1y, b1z)
+    e, f, w00, w01, w10, w11 = _differences(1.0, *args)
+    m = _largest(e, f, w00, w01, w10, w11)
+    r = _finish(_robust_local(e, f, w00, w01, w10, w11), UNSCALED, *args)
+    return (m >= SAFE_MIN) & (m <= SAFE_MAX), *r
+
+
 # -- certified -----------------------------------------------------------------
 
 # The feature pairs in code order, as (feature_a, feature_b).

@@ -201,15 +201,24 @@ def _robust_local(e, w0, w1, g):
     + (bx, by, bz)`` with ``base`` the index of a vertex (0, 1: ``A0``,
     ``A1``; 2 to 4: ``V0`` to ``V2``).  Ties go to the earlier candidate.
     """
+    # Written out rather than looped over k: constant indices into the
+    # tuples keep the loop over queries free of stack traffic, so that it
+    # compiles to SIMD code.
     best = _point_candidate(_point_local(*w0[0], *w0[1], *w0[2]), 0.0, 0.0)
     c = _point_candidate(_point_local(*w1[0], *w1[1], *w1[2]), 1.0, 1.0)
     best = _pick(c[0] < best[0], c, best)
-    for k in range(3):
-        c = _vertex_candidate(w0[k], w1[k], e, k)
-        best = _pick(c[0] < best[0], c, best)
-    for k in range(3):
-        c = _edge_candidate(e, w0, w1, g, k)
-        best = _pick(c[0] < best[0], c, best)
+    c = _vertex_candidate(w0[0], w1[0], e, 0)
+    best = _pick(c[0] < best[0], c, best)
+    c = _vertex_candidate(w0[1], w1[1], e, 1)
+    best = _pick(c[0] < best[0], c, best)
+    c = _vertex_candidate(w0[2], w1[2], e, 2)
+    best = _pick(c[0] < best[0], c, best)
+    c = _edge_candidate(e, w0, w1, g, 0)
+    best = _pick(c[0] < best[0], c, best)
+    c = _edge_candidate(e, w0, w1, g, 1)
+    best = _pick(c[0] < best[0], c, best)
+    c = _edge_candidate(e, w0, w1, g, 2)
+    best = _pick(c[0] < best[0], c, best)
     c = _crossing_candidate(e, w0, w1, g)
     return _pick(c[0] < best[0], c, best)
 
@@ -263,6 +272,18 @@ def robust(a0x, a0y, a0z, a1x, a1y, a1z, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y,
         g = (_scaled(g[0], f1, f2), _scaled(g[1], f1, f2), _scaled(g[2], f1, f2))
         scale = (scale[0] / f1 / f2, scale[1] / f1, 1.0 / f2)
     return _finish(_robust_local(e, w0, w1, g), scale, a0, a1, v0, v1, v2)
+
+
+@inline
+def robust_unscaled(a0x, a0y, a0z, a1x, a1y, a1z, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z):
+    """:func:`robust` without its scaling, for the SIMD pass of a batch loop:
+    ``(in_window, distance, ...)`` as :func:`.segment_segment.robust_unscaled`."""
+    a0, a1 = (a0x, a0y, a0z), (a1x, a1y, a1z)
+    v0, v1, v2 = (v0x, v0y, v0z), (v1x, v1y, v1z), (v2x, v2y, v2z)
+    e, w0, w1, g = _differences(1.0, a0, a1, v0, v1, v2)
+    m = _largest(e, w0, w1, g)
+    r = _finish(_robust_local(e, w0, w1, g), UNSCALED, a0, a1, v0, v1, v2)
+    return (m >= SAFE_MIN) & (m <= SAFE_MAX), *r
 
 
 # -- certified -----------------------------------------------------------------

@@ -159,6 +159,12 @@ def _pick(better, new, old):
     )
 
 
+@inline
+def _keep(best, c):
+    """The nearer of two candidates, the first on a tie."""
+    return _pick(c[0] < best[0], c, best)
+
+
 # A candidate: (sqr_distance, base, ax, ay, az, bx, by, bz, feature_a,
 # feature_b, a0, a1, a2, b0, b1, b2), all floats; the witnesses are base +
 # (ax, ay, az) and base + (bx, by, bz), base the index of a vertex (0 to 2:
@@ -212,23 +218,37 @@ def _crossing_b(w, ga, gb, k):
 def _robust_local(w, ga, gb):
     """The 30 candidates and the nearest, on differences in the safe window;
     ties go to the earlier candidate."""
+    # Written out rather than looped: constant indices into the tuples keep
+    # the loop over queries free of stack traffic, so that it compiles to
+    # SIMD code (see segment_triangle._robust_local).
     best = _vertex_a(w, 0)
-    for i in range(1, 3):
-        c = _vertex_a(w, i)
-        best = _pick(c[0] < best[0], c, best)
-    for j in range(3):
-        c = _vertex_b(w, j)
-        best = _pick(c[0] < best[0], c, best)
-    for k in range(3):
-        for m in range(3):
-            c = _edges(w, ga, gb, k, m)
-            best = _pick(c[0] < best[0], c, best)
-    for k in range(3):
-        c = _crossing_a(w, ga, gb, k)
-        best = _pick(c[0] < best[0], c, best)
-        c = _crossing_b(w, ga, gb, k)
-        best = _pick(c[0] < best[0], c, best)
-    return best
+    best = _keep(best, _vertex_a(w, 1))
+    best = _keep(best, _vertex_a(w, 2))
+    best = _keep(best, _vertex_b(w, 0))
+    best = _keep(best, _vertex_b(w, 1))
+    best = _keep(best, _vertex_b(w, 2))
+    best = _keep(best, _edges(w, ga, gb, 0, 0))
+    best = _keep(best, _edges(w, ga, gb, 0, 1))
+    best = _keep(best, _edges(w, ga, gb, 0, 2))
+    best = _keep(best, _edges(w, ga, gb, 1, 0))
+    best = _keep(best, _edges(w, ga, gb, 1, 1))
+    best = _keep(best, _edges(w, ga, gb, 1, 2))
+    best = _keep(best, _edges(w, ga, gb, 2, 0))
+    best = _keep(best, _edges(w, ga, gb, 2, 1))
+    best = _keep(best, _edges(w, ga, gb, 2, 2))
+    best = _keep(best, _crossing_a(w, ga, gb, 0))
+    best = _keep(best, _crossing_b(w, ga, gb, 0))
+    best = _keep(best, _crossing_a(w, ga, gb, 1))
+    best = _keep(best, _crossing_b(w, ga, gb, 1))
+    best = _keep(best, _crossing_a(w, ga, gb, 2))
+    return _keep(best, _crossing_b(w, ga, gb, 2))
+
+
+@inline
+def _vertex(a, b, index):
+    """Vertex ``index`` (a float: 0 to 2 of ``a``, 3 to 5 of ``b``), by selects."""
+    in_b = b[0] if index == 3.0 else (b[1] if index == 4.0 else b[2])
+    return a[0] if index == 0.0 else (a[1] if index == 1.0 else (a[2] if index == 2.0 else in_b))
 
 
 @inline
@@ -236,14 +256,12 @@ def _finish(r, g, a, b):
     """Undo the scaling ``g``, make the witnesses absolute (vertices exactly)
     and name their features; a zero distance has one point as both witnesses."""
     sqr, base, ax, ay, az, bx, by, bz, fa, fb, a0, a1, a2, b0, b1, b2 = r
-    k = int(base)
-    o = a[k] if k < 3 else b[k - 3]
-    pa = a[min(int(fa), 2)]
-    if fa > float(VERTEX2):
-        pa = (absolute(o[0], ax, g), absolute(o[1], ay, g), absolute(o[2], az, g))
-    pb = b[min(int(fb), 2)]
-    if fb > float(VERTEX2):
-        pb = (absolute(o[0], bx, g), absolute(o[1], by, g), absolute(o[2], bz, g))
+    # Selects, not indices: a tuple indexed at run time goes through memory.
+    o = _vertex(a, b, base)
+    pa = (absolute(o[0], ax, g), absolute(o[1], ay, g), absolute(o[2], az, g))
+    pa = _vertex(a, a, fa) if fa <= float(VERTEX2) else pa
+    pb = (absolute(o[0], bx, g), absolute(o[1], by, g), absolute(o[2], bz, g))
+    pb = _vertex(b, b, fb) if fb <= float(VERTEX2) else pb
     pb = pa if sqr == 0.0 else pb
     dist = math.sqrt(sqr) * g[0] if g[0] != math.inf else math.sqrt(sqr) * g[1] * g[2]
     sqr = sqr * g[0] * g[0] if g[0] != math.inf else sqr * g[1] * g[1] * g[2] * g[2]
@@ -277,6 +295,18 @@ def robust(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y,
         ga, gb = _scale3(ga, f1, f2), _scale3(gb, f1, f2)
         scale = (scale[0] / f1 / f2, scale[1] / f1, 1.0 / f2)
     return _finish(_robust_local(w, ga, gb), scale, a, b)
+
+
+@inline
+def robust_unscaled(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z):
+    """:func:`robust` without its scaling, for the SIMD pass of a batch loop:
+    ``(in_window, distance, ...)`` as :func:`.segment_segment.robust_unscaled`."""
+    a = ((a0x, a0y, a0z), (a1x, a1y, a1z), (a2x, a2y, a2z))
+    b = ((b0x, b0y, b0z), (b1x, b1y, b1z), (b2x, b2y, b2z))
+    w, ga, gb = _differences(1.0, a, b)
+    m = _largest(w, ga, gb)
+    r = _finish(_robust_local(w, ga, gb), UNSCALED, a, b)
+    return (m >= SAFE_MIN) & (m <= SAFE_MAX), *r
 
 
 # -- certified -----------------------------------------------------------------
