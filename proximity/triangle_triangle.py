@@ -9,7 +9,7 @@ applied six times.  Witnesses carry barycentric coordinates over each
 triangle's vertices.
 
 ``robust``
-    The nearest of 30 candidates, each a pair of points on the triangles,
+    The nearest of 21 candidates, each a pair of points on the triangles,
     the union of the six segment-triangle queries' candidates without
     repeats: each vertex of one triangle against the other (six
     point-triangle queries), the interior candidate of each edge of ``A``
@@ -35,9 +35,10 @@ triangle's vertices.
     against a vertex of ``B``), then the distance is rounded faithfully from
     double-double.  Intersecting triangles touch along a segment whose ends
     are edges crossing faces; the answer is the lowest pair: every vertex of
-    ``A`` strictly off ``B``'s plane, then ``A``'s edges in order until one
-    certainly crosses ``B``'s open face (the others certainly missing ``B``),
-    else the same for ``B``'s edges against ``A``.  The distance is then
+    ``A`` certainly off ``B`` (strictly off its plane or beyond an edge),
+    then ``A``'s edges in order until one certainly crosses ``B``'s open face
+    (the others certainly missing ``B``), else the same for ``B``'s edges
+    against ``A``.  The distance is then
     exactly 0, with the crossing point as both witnesses.  Everything else
     goes to :func:`proximity._exact.triangle_triangle`.  Ties go to the
     lowest ``(feature_a, feature_b)`` codes.
@@ -50,7 +51,7 @@ from ._fp import SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale
 from ._jit import inline, part
 from .point_triangle import _robust_local as _point_local
 from .results import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
-from .segment_segment import _interior, _max3, _scaled, absolute
+from .segment_segment import _interior, _max3, _scaled, _triple_sign, absolute
 from .segment_triangle import (
     _cross_of,
     _cross_sign,
@@ -216,7 +217,7 @@ def _crossing_b(w, ga, gb, k):
 
 @inline
 def _robust_local(w, ga, gb):
-    """The 30 candidates and the nearest, on differences in the safe window;
+    """The 21 candidates and the nearest, on differences in the safe window;
     ties go to the earlier candidate."""
     # Written out rather than looped: constant indices into the tuples keep
     # the loop over queries free of stack traffic, so that it compiles to
@@ -313,6 +314,20 @@ def robust_unscaled(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, 
 
 
 @inline
+def _outside(n, abs_n, w, g):
+    """Whether a point (``w``: the triangle's vertices relative to it) lies
+    certainly outside the closed triangle: strictly off its plane, or
+    strictly beyond one of its edges."""
+    off = _normal_sign(n, abs_n, w[0]) != 0
+    beyond = (
+        (_triple_sign(n, abs_n, w[0], g[0]) == -1)
+        | (_triple_sign(n, abs_n, w[1], g[1]) == -1)
+        | (_triple_sign(n, abs_n, w[2], g[2]) == -1)
+    )
+    return off | beyond
+
+
+@inline
 def _crosses(e, w0, w1, g):
     """Three-valued: 1 when the segment ``(e, w0, w1)`` certainly crosses the
     triangle's open face at one point, -1 when it certainly misses the
@@ -327,7 +342,11 @@ def _crosses(e, w0, w1, g):
     outside = (o0 * o1 == -1) | (o1 * o2 == -1) | (o2 * o0 == -1)
     apart = (side0 != 0) & (side0 == side1)
     across = side0 * side1 == -1
-    return 1 if across & inside else (-1 if apart | (across & outside) else 0)
+    # One endpoint in the plane, the other strictly off it: the segment
+    # meets the plane at that endpoint only.
+    at0 = (side0 == 0) & (side1 != 0) & _outside(n, abs_n, w0, g)
+    at1 = (side1 == 0) & (side0 != 0) & _outside(n, abs_n, w1, g)
+    return 1 if across & inside else (-1 if apart | (across & outside) | at0 | at1 else 0)
 
 
 @inline
@@ -336,9 +355,7 @@ def _intersection(w, ga, gb):
     ``(side, edge)``: side 0 for an edge of ``A`` crossing ``B``'s face, 1 for an
     edge of ``B`` crossing ``A``'s; ``(-1, -1)`` when undecided or apart."""
     nb, abs_nb = _cross_of(gb[0], _neg(gb[2]))
-    off = True
-    for i in range(3):
-        off &= _normal_sign(nb, abs_nb, w[i][0]) != 0
+    off = _outside(nb, abs_nb, w[0], gb) & _outside(nb, abs_nb, w[1], gb) & _outside(nb, abs_nb, w[2], gb)
     if not off:
         return -1, -1
     for k in range(3):
@@ -349,7 +366,7 @@ def _intersection(w, ga, gb):
             return 0, k
     na, abs_na = _cross_of(ga[0], _neg(ga[2]))
     for j in range(3):
-        off &= _normal_sign(na, abs_na, w[0][j]) != 0
+        off &= _outside(na, abs_na, _frame_b(w, ga, gb, j)[1], ga)
     if not off:
         return -1, -1
     for k in range(3):
