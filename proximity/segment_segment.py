@@ -61,6 +61,11 @@ keep its formulation but decide the interior case differently.
     ``tests/test_pair_kernels.py`` checks all of it against exact rational
     arithmetic, near-parallel and far-from-the-origin pairs included.
 
+``robust_unscaled``
+    :func:`robust` without its scaling, bit for bit its answer wherever the
+    differences lie in the safe window, which it reports: the SIMD pass of
+    a batch loop, the rest redone with :func:`robust`.
+
 ``certified``
     The closest features and a faithfully rounded distance, or a request
     for the exact fallback (:func:`proximity._exact.segment_segment`), by

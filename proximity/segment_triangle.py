@@ -46,6 +46,11 @@ against an edge (three segment-segment queries), the document's reduction.
     both witnesses.  ``tests/test_pair_kernels.py`` checks this against
     exact rational arithmetic.
 
+``robust_unscaled``
+    :func:`robust` without its scaling, bit for bit its answer wherever the
+    differences lie in the safe window, which it reports: the SIMD pass of
+    a batch loop, the rest redone with :func:`robust`.
+
 ``certified``
     The robust answer names a feature pair; the optimality conditions of
     that pair (the closest point of each shape to the other's lies strictly
@@ -61,9 +66,11 @@ against an edge (three segment-segment queries), the document's reduction.
     its line strictly inside the three edges: the distance is then exactly
     0, with the crossing point as both witnesses.
 
-    Everything else (pairs within rounding of another region, parallel
-    features, touching that is not a proper crossing, degenerate shapes)
-    goes to the exact fallback :func:`proximity._exact.segment_triangle`.
+    A zero-length segment (its endpoints exactly equal) is its first
+    endpoint.  Everything else (pairs within rounding of another region,
+    parallel features, touching that is not a proper crossing, zero-area
+    triangles) goes to the exact fallback
+    :func:`proximity._exact.segment_triangle`.
     Ties go to the lowest ``(feature_a, feature_b)`` codes: the segment's
     feature first, vertices before the edge, then the triangle's vertices,
     edges and face.

@@ -27,6 +27,9 @@ triangle's vertices.
     largest coordinate difference between the six vertices, with the
     scaling, witnesses and features of :mod:`.segment_triangle`.
 
+``robust_unscaled``
+    As in :mod:`.segment_triangle`: the SIMD pass of a batch loop.
+
 ``certified``
     As :mod:`.segment_triangle`: the robust pair's optimality conditions are
     verified strictly (a vertex or an edge of ``A`` is checked as the
