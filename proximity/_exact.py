@@ -88,7 +88,7 @@ def _on_open_segment(x, a, b):
     ee = _dot(e, e)
     if ee == 0:
         return False
-    t = _dot(_sub(x, a), e) / ee
+    t = Fraction(_dot(_sub(x, a), e), ee)
     return 0 < t < 1 and all(a[i] + t * e[i] == x[i] for i in range(len(x)))
 
 
@@ -101,39 +101,39 @@ def _seed_region(d, a, b, c, e):
     if s + t <= det:
         if s < 0 and t < 0:  # region 4
             if d < 0:
-                return (one if -d >= a else -d / a), zero
-            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+                return (one if -d >= a else Fraction(-d, a)), zero
+            return zero, (zero if e >= 0 else one if -e >= c else Fraction(-e, c))
         if s < 0:  # region 3
-            return zero, (zero if e >= 0 else one if -e >= c else -e / c)
+            return zero, (zero if e >= 0 else one if -e >= c else Fraction(-e, c))
         if t < 0:  # region 5
-            return (zero if d >= 0 else one if -d >= a else -d / a), zero
-        return s / det, t / det  # region 0
+            return (zero if d >= 0 else one if -d >= a else Fraction(-d, a)), zero
+        return Fraction(s, det), Fraction(t, det)  # region 0
     if s < 0:  # region 2
         tmp0, tmp1 = b + d, c + e
         if tmp1 > tmp0:
             numer, denom = tmp1 - tmp0, a - 2 * b + c
-            s = one if numer >= denom else numer / denom
+            s = one if numer >= denom else Fraction(numer, denom)
             return s, one - s
-        return zero, (one if tmp1 <= 0 else zero if e >= 0 else -e / c)
+        return zero, (one if tmp1 <= 0 else zero if e >= 0 else Fraction(-e, c))
     if t < 0:  # region 6
         tmp0, tmp1 = b + e, a + d
         if tmp1 > tmp0:
             numer, denom = tmp1 - tmp0, a - 2 * b + c
-            t = one if numer >= denom else numer / denom
+            t = one if numer >= denom else Fraction(numer, denom)
             return one - t, t
-        return (one if tmp1 <= 0 else zero if d >= 0 else -d / a), zero
+        return (one if tmp1 <= 0 else zero if d >= 0 else Fraction(-d, a)), zero
     numer = (c + e) - (b + d)  # region 1
     if numer <= 0:
         s = zero
     else:
         denom = a - 2 * b + c
-        s = one if numer >= denom else numer / denom
+        s = one if numer >= denom else Fraction(numer, denom)
     return s, one - s
 
 
-def _triangle_closest(v, p):
-    """``(closest, s, t)``: the exact closest point of the triangle ``v`` to
-    ``p`` (Fractions) and, for a triangle of non-zero area, its parameters."""
+def _triangle(v, p):
+    """Exact point-triangle query on Fraction vectors: ``(sqr_distance,
+    closest, feature, barycentric)``, all exact; see :func:`triangle`."""
     e0, e1 = _sub(v[1], v[0]), _sub(v[2], v[0])
     a, b, c = _dot(e0, e0), _dot(e0, e1), _dot(e1, e1)
     dvec = _sub(v[0], p)
@@ -141,29 +141,22 @@ def _triangle_closest(v, p):
     if a * c - b * b > 0:
         s, t = _seed_region(d, a, b, c, e)
         closest = [v[0][i] + s * e0[i] + t * e1[i] for i in range(3)]
-        return closest, s, t
     else:
         # Zero area: the triangle is the hull of its edges, a segment or a point.
         best = None
         for i, j in ((0, 1), (1, 2), (2, 0)):
-            _, x = _project(p, v[i], v[j])
+            edge = _sub(v[j], v[i])
+            ee = _dot(edge, edge)
+            u = (
+                min(max(Fraction(_dot(_sub(p, v[i]), edge), ee), Fraction(0)), Fraction(1))
+                if ee
+                else Fraction(0)
+            )
+            x = [v[i][k] + u * edge[k] for k in range(3)]
             dist2 = _dot(_sub(x, p), _sub(x, p))
             if best is None or dist2 < best[0]:
                 best = (dist2, x)
-        closest, s, t = best[1], None, None
-    return closest, s, t
-
-
-def triangle(vertices, point):
-    """Exact point-triangle query for 3D float inputs.
-
-    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with the
-    distance faithfully rounded, the rest correctly rounded, and the feature
-    the lowest-coded one whose relative interior holds the closest point.
-    """
-    v = [[Fraction(float(c)) for c in row] for row in vertices]
-    p = [Fraction(float(c)) for c in point]
-    closest, s, t = _triangle_closest(v, p)
+        closest = best[1]
     sqr = _dot(_sub(closest, p), _sub(closest, p))
 
     # The feature whose relative interior holds the closest point, lowest code first.
@@ -176,16 +169,29 @@ def triangle(vertices, point):
         for code, (i, j) in ((Feature.EDGE01, (0, 1)), (Feature.EDGE12, (1, 2)), (Feature.EDGE20, (2, 0))):
             if _on_open_segment(closest, v[i], v[j]):
                 edge = _sub(v[j], v[i])
-                u = _dot(_sub(closest, v[i]), edge) / _dot(edge, edge)
+                u = Fraction(_dot(_sub(closest, v[i]), edge), _dot(edge, edge))
                 feature, bary = code, [zero] * 3
                 bary[i], bary[j] = 1 - u, u
                 break
         if bary is None:
             bary = [1 - s - t, s, t]
+    return sqr, closest, Feature(feature), bary
+
+
+def triangle(vertices, point):
+    """Exact point-triangle query for 3D float inputs.
+
+    Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` with the
+    distance faithfully rounded, the rest correctly rounded, and the feature
+    the lowest-coded one whose relative interior holds the closest point.
+    """
+    (v, (p,)), unit = _grid(vertices, [point])
+    sqr, closest, feature, bary = _triangle(v, p)
+    sqr *= unit * unit
     return (
         faithful_sqrt(sqr),
         _float(sqr),
-        *(_float(x) for x in closest),
+        *(_float(x * unit) for x in closest),
         int(feature),
         *(_float(w) for w in bary),
     )
@@ -256,8 +262,8 @@ def hull_sqr_distance(vertices, point):
     v = [[Fraction(float(c)) for c in row] for row in vertices]
     p = [Fraction(float(c)) for c in point]
     if len(v) == 3:
-        closest = _triangle_closest(v, p)[0]
-    elif len(v) == 2:
+        return _triangle(v, p)[0]
+    if len(v) == 2:
         closest = _project(p, v[0], v[1])[1]
     else:
         closest = v[0]
@@ -315,3 +321,218 @@ def minus_radius(sqr_bounds, radius):
         if Fraction(below) < t_lo and t_hi < Fraction(above) or bits > 1 << 16:
             return f
         bits *= 2
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _axpy(s, x, y):
+    """``y + s x``."""
+    return [yk + s * xk for xk, yk in zip(x, y, strict=True)]
+
+
+def _segment_segment(p0, p1, q0, q1):
+    """Exact segment-segment query on Fraction vectors.
+
+    The optimality conditions of the squared distance on the parameter
+    square, in code order of the feature pairs (those of the certified
+    method's filter, exactly): the first pair whose conditions hold holds a
+    closest pair, and it is the lowest that does.  Returns ``(sqr_distance,
+    point_a, point_b, feature_a, feature_b, s, t)``, all exact.
+    """
+    e, f = _sub(p1, p0), _sub(q1, q0)
+    w = {(i, j): _sub(q, p) for i, p in enumerate((p0, p1)) for j, q in enumerate((q0, q1))}
+    alpha = {ij: -_dot(w[ij], f) for ij in w}  # (A_i - B_j) . f
+    beta = {(j, i): _dot(w[i, j], e) for i, j in w}  # (B_j - A_i) . e
+    n = _cross(e, f)
+    h = [-_dot(n, _cross(w[i, 0], f)) for i in (0, 1)]  # -s |n|^2 and (1 - s) |n|^2 on the lines
+    k = [_dot(n, _cross(w[0, j], e)) for j in (0, 1)]  # t |n|^2 and -(1 - t) |n|^2
+    vertex, edge = (Feature.VERTEX0, Feature.VERTEX1), Feature.EDGE01
+    conditions = []
+    for i in (0, 1):
+        for j in (0, 1):
+            s_ok = beta[j, 0] <= 0 if i == 0 else beta[j, 1] >= 0
+            t_ok = alpha[i, 0] <= 0 if j == 0 else alpha[i, 1] >= 0
+            conditions.append(((vertex[i], vertex[j]), s_ok and t_ok))
+        on_b = alpha[i, 0] > 0 and alpha[i, 1] < 0
+        conditions.append(((vertex[i], edge), on_b and (h[0] >= 0 if i == 0 else h[1] <= 0)))
+    for j in (0, 1):
+        on_a = beta[j, 0] > 0 and beta[j, 1] < 0
+        conditions.append(((edge, vertex[j]), on_a and (k[0] <= 0 if j == 0 else k[1] >= 0)))
+    # Parallel lines (n = 0) never reach this: a lower pair holds then.
+    conditions.append(((edge, edge), h[0] < 0 < h[1] and k[1] < 0 < k[0]))
+    (fa, fb) = next(pair for pair, holds in sorted(conditions) if holds)
+    zero, one = Fraction(0), Fraction(1)
+    if fa == edge and fb == edge:
+        nn = _dot(n, n)
+        s, t = Fraction(-h[0], nn), Fraction(k[0], nn)
+    elif fb == edge:
+        s = zero if fa == Feature.VERTEX0 else one
+        t = Fraction(alpha[int(fa), 0], _dot(f, f))
+    elif fa == edge:
+        s, t = Fraction(beta[int(fb), 0], _dot(e, e)), zero if fb == Feature.VERTEX0 else one
+    else:
+        s, t = Fraction(int(fa)), Fraction(int(fb))
+    pa, pb = _axpy(s, e, p0), _axpy(t, f, q0)
+    return _dot(_sub(pa, pb), _sub(pa, pb)), pa, pb, fa, fb, s, t
+
+
+def _grid(*arrays):
+    """Float arrays (of rows) as integers times one power of two: ``(rows,
+    unit)`` with every value ``rows[..] * unit``, exactly.
+
+    The queries then multiply integers, and form a Fraction only where they
+    divide, which makes the exact arithmetic several times faster.
+    """
+    values = [[[Fraction(float(c)) for c in row] for row in arr] for arr in arrays]
+    shift = max(x.denominator.bit_length() - 1 for arr in values for row in arr for x in row)
+    rows = [
+        [[x.numerator << (shift - x.denominator.bit_length() + 1) for x in row] for row in arr]
+        for arr in values
+    ]
+    return rows, Fraction(1, 1 << shift)
+
+
+def segment_segment(a, b):
+    """Exact segment-segment query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, s, t)`` with the distance faithfully rounded, the
+    rest correctly rounded, and the lowest feature pair that holds a closest
+    pair; a zero distance has one point as both witnesses.
+    """
+    ((p0, p1), (q0, q1)), unit = _grid(a, b)
+    sqr, pa, pb, fa, fb, s, t = _segment_segment(p0, p1, q0, q1)
+    sqr *= unit * unit
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
+        int(fa),
+        int(fb),
+        _float(s),
+        _float(t),
+    )
+
+
+_TRIANGLE_EDGES = ((Feature.EDGE01, 0, 1), (Feature.EDGE12, 1, 2), (Feature.EDGE20, 2, 0))
+
+
+def _segment_triangle(p0, p1, v):
+    """Exact segment-triangle query on Fraction vectors.
+
+    The minimum over the document's sub-queries, each exact: each endpoint
+    against the triangle, the segment against each edge, and the segment
+    crossing the open face.  Every feature pair but a parallel edge-face
+    pair (never the lowest that holds a closest pair) belongs to one of
+    them, and each returns its lowest, so the lowest ``(sqr_distance,
+    pair)`` over them is the answer.  Returns ``(sqr_distance, point_a,
+    point_b, feature_a, feature_b, s, barycentric)``, all exact.
+    """
+    zero = Fraction(0)
+    candidates = []
+    for i, p in enumerate((p0, p1)):
+        sqr, closest, feature, bary = _triangle(v, p)
+        candidates.append((sqr, (Feature(i), feature), p, closest, Fraction(i), bary))
+    for code, j, k in _TRIANGLE_EDGES:
+        sqr, pa, pb, fa, fb, s, t = _segment_segment(p0, p1, v[j], v[k])
+        bary = [zero] * 3
+        bary[j], bary[k] = 1 - t, t
+        feature = code if fb == Feature.EDGE01 else Feature(j if fb == Feature.VERTEX0 else k)
+        candidates.append((sqr, (fa, feature), pa, pb, s, bary))
+    e = _sub(p1, p0)
+    n = _cross(_sub(v[1], v[0]), _sub(v[2], v[0]))
+    nn = _dot(n, n)
+    h0, h1 = _dot(n, _sub(p0, v[0])), _dot(n, _sub(p1, v[0]))
+    if nn != 0 and h0 * h1 < 0:
+        s = Fraction(h0, h0 - h1)
+        x = _axpy(s, e, p0)
+        bary = [
+            Fraction(_dot(n, _cross(_sub(v[(k + 1) % 3], x), _sub(v[(k + 2) % 3], x))), nn) for k in range(3)
+        ]
+        if all(b > 0 for b in bary):
+            candidates.append((zero, (Feature.EDGE01, Feature.FACE), x, x, s, bary))
+    sqr, (fa, fb), pa, pb, s, bary = min(candidates, key=lambda c: (c[0], c[1]))
+    return sqr, pa, pb, fa, fb, s, bary
+
+
+def segment_triangle(segment, triangle):
+    """Exact segment-triangle query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, s, b0, b1, b2)`` as :func:`segment_segment` does,
+    with the triangle witness's barycentric coordinates.
+    """
+    ((p0, p1), v), unit = _grid(segment, triangle)
+    sqr, pa, pb, fa, fb, s, bary = _segment_triangle(p0, p1, v)
+    sqr *= unit * unit
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
+        int(fa),
+        int(fb),
+        _float(s),
+        *(_float(w) for w in bary),
+    )
+
+
+def _edge_weights(i, j, s):
+    """Barycentric weights of the point at parameter ``s`` from vertex ``i`` to vertex ``j``."""
+    weights = [Fraction(0)] * 3
+    weights[i], weights[j] = 1 - s, s
+    return weights
+
+
+def _edge_feature(code, i, j, feature):
+    """A triangle's feature for a segment feature of its edge ``code`` from vertex ``i`` to ``j``."""
+    if feature == Feature.EDGE01:
+        return code
+    return Feature(i if feature == Feature.VERTEX0 else j)
+
+
+def _triangle_triangle(a, b):
+    """Exact triangle-triangle query on Fraction vectors.
+
+    The least of the six exact segment-triangle queries of each edge of one
+    triangle against the other: every feature pair but two faces (never the
+    lowest that holds a closest pair) belongs to one of them, and each
+    returns its lowest.  Returns ``(sqr_distance, point_a, point_b,
+    feature_a, feature_b, barycentric_a, barycentric_b)``, all exact.
+    """
+    candidates = []
+    for code, i, j in _TRIANGLE_EDGES:
+        sqr, pa, pb, fa, fb, s, bary = _segment_triangle(a[i], a[j], b)
+        pair = (_edge_feature(code, i, j, fa), fb)
+        candidates.append((sqr, pair, pa, pb, _edge_weights(i, j, s), bary))
+    for code, i, j in _TRIANGLE_EDGES:
+        sqr, pb, pa, fb, fa, s, bary = _segment_triangle(b[i], b[j], a)
+        pair = (fa, _edge_feature(code, i, j, fb))
+        candidates.append((sqr, pair, pa, pb, bary, _edge_weights(i, j, s)))
+    sqr, (fa, fb), pa, pb, bary_a, bary_b = min(candidates, key=lambda c: (c[0], c[1]))
+    return sqr, pa, pb, fa, fb, bary_a, bary_b
+
+
+def triangle_triangle(a, b):
+    """Exact triangle-triangle query for 3D float inputs, the certified method's fallback.
+
+    Returns ``(distance, sqr_distance, pax, pay, paz, pbx, pby, pbz,
+    feature_a, feature_b, a0, a1, a2, b0, b1, b2)`` as :func:`segment_segment`
+    does, with both witnesses' barycentric coordinates.
+    """
+    (va, vb), unit = _grid(a, b)
+    sqr, pa, pb, fa, fb, bary_a, bary_b = _triangle_triangle(va, vb)
+    sqr *= unit * unit
+    return (
+        faithful_sqrt(sqr),
+        _float(sqr),
+        *(_float(x * unit) for x in pa),
+        *(_float(x * unit) for x in pb),
+        int(fa),
+        int(fb),
+        *(_float(w) for w in bary_a),
+        *(_float(w) for w in bary_b),
+    )

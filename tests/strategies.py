@@ -20,6 +20,7 @@ from proximity.testing import scenes
 
 __all__ = [
     "DISK_FAMILIES",
+    "PAIR_FAMILIES",
     "SEEDS",
     "TRIANGLE_FAMILIES",
     "SIZES",
@@ -38,6 +39,7 @@ __all__ = [
     "needle_scenes",
     "offset_scenes",
     "on_feature_scenes",
+    "pair_scenes",
     "powers_of_ten",
     "rigid_motions",
     "sliver_scenes",
@@ -213,6 +215,40 @@ def disk_scenes(n: Strategy[int] = SIZES) -> Strategy[scenes.DiskScene]:
     )
 
 
+# -- pairs of shapes ---------------------------------------------------------------------
+
+
+def _signed_gaps() -> Strategy[float]:
+    """0, or plus or minus ``10**k`` for k in [-15, -1]."""
+    signs = st.sampled_from([-1.0, 1.0])
+    return st.one_of(st.just(0.0), st.builds(lambda s, g: s * g, signs, powers_of_ten(-15, -1)))
+
+
+def pair_scenes(pair: str, n: Strategy[int] = SIZES) -> Strategy[scenes.PairScene]:
+    """Scenes of any pair family of `proximity.testing.scenes` for `pair` (a key of `scenes.PAIRS`).
+
+    Parameters are drawn from the families' ranges: contact gaps of 0 or
+    ``+-1e-15`` to ``+-0.1``, near-parallel angles of 1e-16 to 1e-1, scales of
+    1e-300 to 1e300, offsets of 1e3 to 1e10 and distance ratios of 1e2 to 1e9.
+    """
+    fixed = st.just(pair)
+    return st.one_of(
+        _scenes(scenes.pair_well_conditioned, n, pair=fixed),
+        _scenes(scenes.pair_contact, n, pair=fixed, gap=_signed_gaps()),
+        _scenes(scenes.pair_near_parallel, n, pair=fixed, angle=powers_of_ten(-16, -1)),
+        _scenes(scenes.pair_parallel, n, pair=fixed, kind=st.sampled_from(["touching", "apart"])),
+        _scenes(
+            scenes.pair_degenerate,
+            n,
+            pair=fixed,
+            kind=st.sampled_from(["point", "collinear", "two_coincident"]),
+        ),
+        _scenes(scenes.pair_magnitude, n, pair=fixed, scale=powers_of_ten(-300, 300)),
+        _scenes(scenes.pair_offset, n, pair=fixed, offset=powers_of_ten(3, 10)),
+        _scenes(scenes.pair_far, n, pair=fixed, ratio=powers_of_ten(2, 9)),
+    )
+
+
 # -- rigid motions ----------------------------------------------------------------------
 
 
@@ -293,3 +329,6 @@ DISK_FAMILIES = {
     "unnormalized": disk_unnormalized_scenes(),
 }
 """A strategy per circle and disk family, with its default parameter range."""
+
+PAIR_FAMILIES = {pair: pair_scenes(pair) for pair in scenes.PAIRS}
+"""A strategy per pair of shapes (a key of `proximity.testing.scenes.PAIRS`), over every pair family."""

@@ -291,6 +291,98 @@ def test_triangle_answer_is_certified_projection(query):
     assert all(closed[f] == result.sqr_distance for f in result.features)
 
 
+# -- pairs of shapes ----------------------------------------------------------------
+
+PAIR_REFERENCES = {
+    (2, 2): exact.segment_segment_closest,
+    (2, 3): exact.segment_triangle_closest,
+    (3, 3): exact.triangle_triangle_closest,
+}
+# Small integers make ties (parallel, coplanar, touching, degenerate) common.
+pair_coordinates = st.one_of(st.integers(-3, 3).map(float), coordinates)
+
+
+@st.composite
+def pair_queries(draw):
+    ka, kb = draw(st.sampled_from(sorted(PAIR_REFERENCES)))
+    coordinate = st.sampled_from([pair_coordinates, st.integers(-3, 3).map(float)]).flatmap(lambda c: c)
+    a = draw(st.lists(st.lists(coordinate, min_size=3, max_size=3), min_size=ka, max_size=ka))
+    b = draw(st.lists(st.lists(coordinate, min_size=3, max_size=3), min_size=kb, max_size=kb))
+    return a, b
+
+
+@settings(max_examples=300, deadline=None)
+@given(pair_queries())
+def test_pair_answer_is_certified_by_a_separating_slab(query):
+    """The witnesses are points of the shapes and the planes through them,
+    perpendicular to ``point_b - point_a``, have shape a on one side and shape
+    b on the other: no pair of points is closer.  The features are the
+    witnesses' carriers and the lowest of the tie set."""
+    a, b = query
+    result = PAIR_REFERENCES[len(a), len(b)](a, b)
+    va, vb = [as_fractions(row) for row in a], [as_fractions(row) for row in b]
+    pa, pb = result.point_a, result.point_b
+    for weights, vertices, point, feature in (
+        (result.weights_a, va, pa, result.feature_a),
+        (result.weights_b, vb, pb, result.feature_b),
+    ):
+        assert sum(weights) == 1 and all(w >= 0 for w in weights)
+        assert {i for i, w in enumerate(weights) if w != 0} == SUPPORT[feature]
+        assert point == tuple(sum(w * v[k] for w, v in zip(weights, vertices, strict=True)) for k in range(3))
+    v = tuple(y - x for x, y in zip(pa, pb, strict=True))
+    assert result.sqr_distance == sum(x * x for x in v)
+    for u in va:
+        assert sum((uk - xk) * vk for uk, xk, vk in zip(u, pa, v, strict=True)) <= 0
+    for u in vb:
+        assert sum((uk - yk) * vk for uk, yk, vk in zip(u, pb, v, strict=True)) >= 0
+    # The reported pair is the lowest of those holding a closest pair, found
+    # by another route (whether relative interiors meet), and each of those
+    # is at the minimum as a pair of closed features.
+    assert (result.feature_a, result.feature_b) == min(result.features)
+    closed = result.feature_sqr_distances
+    assert all(closed[pair] == result.sqr_distance for pair in result.features)
+    assert all(distance >= result.sqr_distance for distance in closed.values())
+
+
+def test_pair_ties_and_intersections():
+    # Coplanar triangles overlapping in an area: every pair of features that
+    # meets is in the tie set, the face pair included.
+    a = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0]]
+    r = exact.triangle_triangle_closest(a, [[1.0, 1.0, 0.0], [5.0, 1.0, 0.0], [1.0, 5.0, 0.0]])
+    assert r.sqr_distance == 0 and (FACE, FACE) in r.features
+    # The lowest: a's edge 12 crosses b's edge 01 at (3, 1, 0).
+    assert (r.feature_a, r.feature_b) == (EDGE12, EDGE01) and r.point_a == as_fractions([3, 1, 0])
+    assert r.features == {
+        (EDGE12, EDGE01),
+        (EDGE12, EDGE20),
+        (EDGE12, FACE),
+        (FACE, VERTEX0),
+        (FACE, EDGE01),
+        (FACE, EDGE20),
+        (FACE, FACE),
+    }
+    # A triangle through another along a segment: its ends are edge-face pairs.
+    r = exact.triangle_triangle_closest(a, [[1.0, 1.0, -1.0], [1.0, 1.0, 1.0], [5.0, 5.0, 1.0]])
+    assert r.features == {(EDGE12, FACE), (FACE, EDGE01), (FACE, FACE)}
+    # A segment lying in a triangle's plane, parallel to an edge, above the face.
+    r = exact.segment_triangle_closest([[1.0, 1.0, 2.0], [2.0, 1.0, 2.0]], a)
+    assert r.sqr_distance == 4 and (r.feature_a, r.feature_b) == (VERTEX0, FACE)
+    assert r.features == {(VERTEX0, FACE), (VERTEX1, FACE), (EDGE01, FACE)}
+    # Zero-length and zero-area shapes: their points are their vertices'.
+    r = exact.segment_triangle_closest(
+        [[1.0, 1.0, 1.0], [1.0, 1.0, 1.0]], [[0.0] * 3, [2.0, 2.0, 0.0], [4.0, 4.0, 0.0]]
+    )
+    assert r.sqr_distance == 1
+    assert r.features == {(VERTEX0, EDGE01), (VERTEX0, EDGE20), (VERTEX1, EDGE01), (VERTEX1, EDGE20)}
+    assert (r.feature_a, r.feature_b) == (VERTEX0, EDGE01)
+
+
+def test_pair_scale():
+    a, b = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[0.0, 3.0, 0.0], [0.0, 0.0, -2.0], [0.5, 0.5, 0.5]]
+    assert exact.pair_scale(a, b) == 3
+    assert exact.pair_scale(b, a) == 3
+
+
 # -- circle and disk -----------------------------------------------------------
 
 ORIGIN, Z2 = [0.0, 0.0, 0.0], [0.0, 0.0, 2.0]
