@@ -330,6 +330,7 @@ class Output:
             raise self._error(exc) from None
 
     def discard(self):
+        """Remove the partial output, after a failure."""
         try:
             self._remove(self.partial)
         except OSError:
@@ -418,7 +419,7 @@ def _progress(total, show):
 
 
 def peak_rss():
-    """This process's peak resident memory, in bytes (None where not known)."""
+    """Peak resident memory of this process, in bytes (None where not known)."""
     try:
         import resource
     except ImportError:  # Windows
@@ -477,6 +478,7 @@ def _worker_peak_rss():
 
 
 def parse(argv):
+    """The command's arguments, parsed from ``argv``."""
     from .methods import REGISTRY
 
     parser = argparse.ArgumentParser(
@@ -519,6 +521,7 @@ def _terminate(signum, frame):
 
 
 def main(argv=None):
+    """Run ``python -m proximity.cloud``; returns its exit status."""
     args = parse(argv)
     show = sys.stderr.isatty() if args.progress is None else args.progress
     started = time.perf_counter()

@@ -130,6 +130,7 @@ def compile_all(methods=None, log=sys.stdout):
 
 
 def main(argv=None):
+    """Run ``python -m proximity.compile``; returns its exit status."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.compile",
         description="Compile proximity's kernels into the disk cache, so that first queries start at once.",

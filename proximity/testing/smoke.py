@@ -76,6 +76,7 @@ def compare(out, reference):
 
 
 def main(argv=None):
+    """Run the smoke test; returns its exit status (1 where arrays differ)."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.testing.smoke", description=__doc__.split("\n")[0]
     )
