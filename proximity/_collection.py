@@ -9,7 +9,8 @@ chosen once, at construction.
 import numpy as np
 
 from . import _lazy, _threads
-from ._validate import as_float64, frozen
+from ._validate import as_float64, cutoff, freeze_result, frozen
+from .results import attach
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
 BROAD_PHASES = ("auto", "brute", "bvh")
@@ -89,8 +90,9 @@ class Collection(Frozen):
         with _threads.kernel():
             return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"])
 
-    def _query(self, points, method, full):
+    def _query(self, points, method, full, max_distance=None):
         method = check_method(method, self.methods)
+        limit = cutoff(max_distance)
         points = as_float64(points, "points", "(..., 3)")
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
@@ -100,7 +102,8 @@ class Collection(Frozen):
         loose = self._tree.loose and method.loose
         with _threads.kernel():
             broadphase = _lazy.load("proximity.broadphase")
-            out = broadphase.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
+            flat = points.reshape(-1, 3)
+            out = broadphase.nearest(self._tree, method, flat, full, loose=loose, cutoff=limit)
         if self._tree.radius >= 0:
             self._rounded(out, points.reshape(-1, 3), full)
         return out_shape, out
@@ -109,7 +112,7 @@ class Collection(Frozen):
         """The search's answers for rounded primitives (signed ``d - r``) as a
         collection's: the distance ``max(d - r, 0)``, the signed one kept as
         ``signed_distance``, and closest points moved to the rounded surface."""
-        from ._rounding import surface_points
+        from ._rounding import outward, surface_directions, surface_points
 
         signed = out["distance"]
         distance = np.maximum(signed, 0.0) + 0.0
@@ -123,8 +126,15 @@ class Collection(Frozen):
         with np.errstate(invalid="ignore"):
             core = signed + radius
         rows_of = lambda rows: (kinds[rows], params[rows])  # noqa: E731
-        out["point"] = surface_points(points, out["point"], core, radius, rows_of)
+        on_core = out["point"]
+        out["point"] = surface_points(points, on_core, core, radius, rows_of)
         out["sqr_distance"] = distance * distance
+        # The normals, outwards on the rounded surfaces (the cores' directions where unrounded).
+        fallback = surface_directions(kinds, params)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            away = (points - out["point"]) / distance[:, None]
+        fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
+        out["normal"] = outward(out["point"], on_core, radius, fallback)
 
     def inflated(self, radius):
         """The points within ``radius`` of the collection's surface: a thick
@@ -133,7 +143,7 @@ class Collection(Frozen):
 
         return Inflated(self, radius)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Distance from each point to the nearest primitive.
 
         Parameters
@@ -141,6 +151,11 @@ class Collection(Frozen):
         points : array_like, shape ``(..., 3)``
         method : str, keyword-only
             One of :attr:`methods`; default ``"robust"``.
+        max_distance : float, keyword-only, optional
+            A cutoff: rows with nothing within it get ``inf`` (and, in a
+            result, NaN points, feature ``NONE``, index -1); the search does
+            not look farther, which makes small cutoffs fast.  The rows within
+            it are answered as without it, bit for bit.
 
         Returns
         -------
@@ -156,10 +171,10 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "distance", args)
-        out_shape, out = self._query(points, method, full=False)
+        out_shape, out = self._query(points, method, full=False, max_distance=max_distance)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Closest point, its distance and the nearest primitive, for each point.
 
         Parameters
@@ -169,6 +184,11 @@ class Collection(Frozen):
             ``NONE`` and index -1 in those rows only.
         method : str, keyword-only
             One of :attr:`methods`; default ``"robust"``.
+        max_distance : float, keyword-only, optional
+            A cutoff: rows with nothing within it get ``inf`` (and, in a
+            result, NaN points, feature ``NONE``, index -1); the search does
+            not look farther, which makes small cutoffs fast.  The rows within
+            it are answered as without it, bit for bit.
 
         Returns
         -------
@@ -186,12 +206,25 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "closest_point", args)
-        out_shape, out = self._query(points, method, full=True)
+        out_shape, out = self._query(points, method, full=True, max_distance=max_distance)
         out.pop("signed_distance", None)
+        normal = out.pop("normal", None)
         fields = {name: value.reshape(out_shape + value.shape[1:]) for name, value in out.items()}
-        return self._result(fields)
+        result = attach(self._result(fields), as_float64(points, "points", ""), None, self)
+        if normal is not None:
+            result.__dict__["_normal"] = freeze_result(normal.reshape(out_shape + (3,)))
+        return result
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD):
+    def _surface_normals(self, result, rows, members):
+        """The normals at the closest points of rows ``rows`` (on the
+        collection): its primitives' (:func:`proximity._rounding.surface_directions`)."""
+        from ._rounding import surface_directions
+
+        index = self._nearest_index(result).reshape(-1)[rows]
+        kinds, params = self._primitives(index)
+        return surface_directions(kinds, params)
+
+    def signed_distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Signed distance to the nearest primitive: ``d - r`` for a rounded
         one, negative inside it (:class:`proximity.Inflated`); for the
         others, the distance.
@@ -205,5 +238,5 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "signed_distance", args)
-        out_shape, out = self._query(points, method, full=False)
+        out_shape, out = self._query(points, method, full=False, max_distance=max_distance)
         return out.get("signed_distance", out["distance"]).reshape(out_shape)[()]

@@ -1,6 +1,7 @@
 """Validation at the boundary: every check happens here, never in a kernel."""
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -146,6 +147,19 @@ def freeze_fields(state):
         if isinstance(value, np.ndarray):
             value = freeze_result(value)
         elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-            value = dataclasses.replace(value, **freeze_fields(vars(value)))
+            fields = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+            value = dataclasses.replace(value, **freeze_fields(fields))
         frozen_state[name] = value
     return frozen_state
+
+
+def cutoff(max_distance):
+    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it."""
+    if max_distance is None:
+        return math.inf
+    if isinstance(max_distance, bool) or not isinstance(max_distance, (int, float, np.integer, np.floating)):
+        raise TypeError(f"max_distance must be a number or None; got {type(max_distance).__name__}")
+    value = float(max_distance)
+    if not value >= 0.0:  # NaN as well
+        raise ValueError(f"max_distance must be >= 0 (or None); got {max_distance!r}")
+    return value

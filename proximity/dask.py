@@ -37,7 +37,7 @@ import numpy as np
 
 from . import _threads, primitives
 from ._validate import as_array
-from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult
+from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult, asdict
 from .shapes import DEFAULT_METHOD, Frozen, check_method
 
 __all__ = ["closest_point", "distance", "records"]
@@ -184,7 +184,7 @@ def _records_block(block, shape, method, threads, per_host, dtype):
         if dtype.names == ("distance",):
             result = {"distance": shape.distance(block, method=method)}
         else:
-            result = vars(shape.closest_point(block, method=method))
+            result = asdict(shape.closest_point(block, method=method))
     out = np.empty(len(block), dtype)
     for name in dtype.names:
         out[name] = result[name]

@@ -23,9 +23,9 @@ rounding of ``sqrt(s) - r`` is decided (:func:`proximity._exact.minus_radius`).
 import numpy as np
 
 from . import primitives
-from ._rounding import certify_difference, surface_points
-from ._validate import broadcast_batch, freeze_result, frozen_float64, require_finite
-from .results import format_repr
+from ._rounding import certify_difference, outward, surface_points
+from ._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
+from .results import asdict, beyond, format_repr
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
 __all__ = ["Capsule", "Inflated", "Sphere"]
@@ -121,6 +121,9 @@ class Inflated(Frozen):
     def _answer(self, points, method, full):
         """``(signed distance, result or None)``: the core's answer, rounded."""
         method = check_method(method, self.methods)
+        # The certified method's exact fallback needs each row's nearest
+        # primitive, which a collection's distances alone do not say.
+        full = full or (method.exact_fallback and not hasattr(self.core, "_primitive"))
         if full:
             core = self.core.closest_point(points, method=method.name)
             d = np.asarray(core.distance)
@@ -139,17 +142,19 @@ class Inflated(Frozen):
         """Per flat row of ``rows``: ``(primitive, params, point)`` of the core's nearest primitive."""
         return _primitive_rows(self.core, core, points, shape, rows)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Distance from each point to the rounded solid: ``max(d - r, 0)``.
 
-        Parameters and broadcasting are those of :func:`proximity.distance`.
+        Parameters and broadcasting are those of :func:`proximity.distance`;
+        ``max_distance`` is a cutoff, as for the other shapes.
         """
         if args:
             raise keyword_only(self, "distance", args)
+        limit = cutoff(max_distance)
         e, _, _ = self._answer(points, method, full=False)
-        return _frozen(np.maximum(e, 0.0) + 0.0)
+        return _frozen(beyond(np.maximum(e, 0.0) + 0.0, limit))
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD):
+    def signed_distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Signed distance to the rounded solid's surface, ``d - r``: negative inside.
 
         Examples
@@ -161,8 +166,9 @@ class Inflated(Frozen):
         """
         if args:
             raise keyword_only(self, "signed_distance", args)
+        limit = cutoff(max_distance)
         e, _, _ = self._answer(points, method, full=False)
-        return _frozen(e + 0.0)
+        return _frozen(beyond(e + 0.0, limit))
 
     def contains(self, points, *args, method=DEFAULT_METHOD):
         """Whether each point is in the rounded solid: within ``r`` of the core."""
@@ -171,7 +177,7 @@ class Inflated(Frozen):
         e, _, _ = self._answer(points, method, full=False)
         return _frozen(e <= 0.0)
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """The nearest point of the rounded solid's surface to each point.
 
         Returns the core's result type: ``distance`` and ``sqr_distance``
@@ -180,6 +186,7 @@ class Inflated(Frozen):
         """
         if args:
             raise keyword_only(self, "closest_point", args)
+        limit = cutoff(max_distance)
         e, core, shape = self._answer(points, method, full=True)
         p = np.broadcast_to(np.asarray(points, dtype=np.float64), shape + (self.dim,))
         c = np.broadcast_to(np.asarray(core.point), shape + (self.dim,))
@@ -189,10 +196,18 @@ class Inflated(Frozen):
         point = surface_points(p, c, d, r, rows_of)
         distance = np.maximum(e, 0.0) + 0.0
         fields = {name: np.broadcast_to(value, shape + np.shape(value)[np.ndim(core.distance) :])
-                  for name, value in vars(core).items()}  # fmt: skip
+                  for name, value in asdict(core).items()}  # fmt: skip
         with np.errstate(over="ignore", under="ignore"):
             fields.update(distance=distance, sqr_distance=distance * distance, point=point)
-        return type(core)(**fields)
+        result = type(core)(**fields)
+        # Its normals: the rounded surface's, outwards (along P - point where P is outside).
+        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape))
+        result.__dict__["_normal"] = freeze_result(np.array(normal))
+        if limit < np.inf:
+            far = np.asarray(result.distance) > limit
+            result = beyond(result, limit)
+            result.__dict__["_normal"] = freeze_result(np.where(far[..., None], np.nan, normal))
+        return result
 
 
 class Sphere(Inflated):

@@ -262,6 +262,24 @@ class TriangleMesh(Collection):
             inside[rows] = _signed.winding_numbers(self.vertices, self.faces, flat[rows]) > 0.5
         return out_shape, distance, inside
 
+    def _nearest_index(self, result):
+        return np.asarray(result.face)
+
+    def _surface_normals(self, result, rows, members):
+        """The normals at the closest points of rows ``rows`` (on the mesh):
+        the angle-weighted pseudonormal of the closest face, edge or vertex
+        where the mesh is closed, else the face's normal."""
+        face = np.asarray(result.face).reshape(-1)[rows]
+        feature = np.asarray(result.feature).reshape(-1)[rows]
+        signs = self._signs
+        if signs is None:
+            signs = _lazy.load("proximity._signed").Signs(self.vertices, self.faces)
+            object.__setattr__(self, "_signs", signs)  # a cache: the mesh does not change
+        if not signs.closed:
+            return super()._surface_normals(result, rows, members)
+        table_rows, _ = _lazy.load("proximity._signed").feature_rows(signs, self.faces, face, feature)
+        return signs.table[table_rows, :3]
+
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""
         return _primitives(self.vertices, self.faces[index])

@@ -106,6 +106,9 @@ class Scene(Collection):
             shapes += f", ... ({len(self.shapes) - 4} more)"
         return f"Scene([{shapes}], broad_phase={self.broad_phase!r})"
 
+    def _nearest_index(self, result):
+        return np.asarray(result.primitive)
+
     def _rows(self):
         """``(kinds, params)`` of every primitive, in order, as a collection stores them."""
         kinds, params, _, _ = _primitives(self.shapes)

@@ -15,6 +15,7 @@ from . import _counts, _lazy, _pool, _threads
 from ._validate import (
     as_float64,
     broadcast_batch,
+    cutoff,
     freeze_fields,
     frozen,
     frozen_float64,
@@ -29,6 +30,8 @@ from .results import (
     Result,
     SegmentResult,
     TriangleResult,
+    attach,
+    beyond,
     circle_from_row,
     disk_from_row,
     format_repr,
@@ -275,20 +278,24 @@ class _Facade(Frozen):
             self._kernels().exact_row(row, self._args, point)
         _counts.count(1, int(undecided))
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Distance from each point to the shape; see :func:`proximity.distance`."""
         if args:
             raise keyword_only(self, "distance", args)
+        if max_distance is not None:
+            return beyond(self.distance(points, method=method), cutoff(max_distance))
         row = self._single(points, method)
         if row is not None:
             return row[0]
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
         if args:
             raise keyword_only(self, "closest_point", args)
+        if max_distance is not None:
+            return beyond(self.closest_point(points, method=method), cutoff(max_distance))
         # One float64 point against a single shape is the drop-in narrow-phase
         # call, made once per pair from Python; it is :meth:`_single` written
         # out, because at a few microseconds a call every lookup counts.
@@ -302,10 +309,12 @@ class _Facade(Frozen):
                 if exact_fallback:
                     self._certified_row(row, points)
                 row.setflags(False)  # write=False, passed positionally: the faster call
-                return self._from_row(row)
+                result = self._from_row(row)
+                result.__dict__["_query"] = (points, None, self)  # for its normal (results.attach)
+                return result
         row = self._single(points, method)
         if row is not None:
-            return self._from_row(row)
+            return attach(self._from_row(row), points, None, self)
         out_shape, out = self._query(points, method, full=True)
         fields = {}
         for name, value in out.items():
@@ -313,7 +322,20 @@ class _Facade(Frozen):
             if name == "point":
                 value = value[..., : self.dim]
             fields[name] = value
-        return self._result(**fields)
+        count = int(np.prod(self.batch_shape, dtype=int))
+        members = np.arange(count).reshape(self.batch_shape) if self.batch_shape else None
+        return attach(self._result(**fields), as_float64(points, "points", ""), members, self)
+
+    def _surface_normals(self, result, rows, members):
+        """The shape's normals at the closest points of rows ``rows`` (on the
+        shape), asked of batch members ``members`` (None: the shape is one)."""
+        kinds, params = self._rows()
+        m = np.zeros(len(rows), np.int64) if members is None else members
+        if self.dim == 2:
+            return _normals_2d(self._corners if hasattr(self, "_corners") else 0, params[m])
+        from ._rounding import surface_directions
+
+        return surface_directions(kinds[m], params[m])
 
 
 class _Hull(_Facade):
@@ -600,6 +622,19 @@ class Disk(_Round):
     _result = DiskResult
     _from_row = staticmethod(disk_from_row)
     _is_disk = True
+
+
+def _normals_2d(corners, params):
+    """Normals of 2D hulls (embedded in ``z = 0``) at points on them: a
+    segment's perpendicular in the plane; none (NaN) for a triangle or a
+    point, which have no direction there."""
+    out = np.full((len(params), 3), np.nan)
+    if corners == 2:
+        e = params[:, 3:5] - params[:, 0:2]
+        e = e / np.max(np.abs(e), axis=1, keepdims=True)
+        n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1, keepdims=True)
+        out[:, :2] = np.where(np.isfinite(n), n, np.nan)
+    return out
 
 
 def _rows(primitive, params):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from proximity import Circle, Disk, Scene, Triangle, TriangleMesh
+from proximity.results import asdict
 
 da = pytest.importorskip("dask.array")
 dask = pytest.importorskip("dask")
@@ -30,7 +31,7 @@ def _cloud(n=20_000, seed=0):
 def _same_fields(arrays, result):
     """Every field of the dask answer ``arrays`` (computed) equals ``result``'s, bit for bit."""
     got = dask.compute(*arrays)
-    assert arrays._fields == tuple(vars(result))
+    assert arrays._fields == tuple(asdict(result))
     for name, value in zip(arrays._fields, got, strict=True):
         expected = getattr(result, name)
         assert value.dtype == expected.dtype and value.shape == expected.shape, name

@@ -82,7 +82,7 @@ def _visiting_order(points):
 
 
 
-def nearest(tree, method, points, full, loose=False):
+def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     """Nearest primitive to each of the validated points ``(n, 3)``.
 
     Parameters
@@ -94,6 +94,9 @@ def nearest(tree, method, points, full, loose=False):
         Whether to fill every output or only ``distance``.
     loose : bool
         Use the loose boxes (``eberly``).
+    cutoff : float
+        Rows with nothing within this distance get an infinite distance (and
+        NaN, ``NONE`` and -1 in the other outputs); the search prunes beyond it.
 
     Returns
     -------
@@ -127,17 +130,18 @@ def nearest(tree, method, points, full, loose=False):
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     with numba.parallel_chunksize(1):
-        search_kernel(method, kinds, tree.radius)(arrays, tree.depth, magnitude, points, order, out, full)
+        search = search_kernel(method, kinds, tree.radius)
+        search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
-        _resolve(tree, rows, points, out, full, cull, bounds, magnitude)
+        _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff)
     result = out._asdict()
     del result["undecided"]
     return result
 
 
 
-def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
+def _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff):
     """Finish rows whose nearest primitive may be an undecided certified answer.
 
     Every candidate within the row's bound goes through the per-shape
@@ -169,6 +173,13 @@ def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
         if not answers:
             continue
         d, idx, r, j = min(answers, key=lambda a: (a[0], a[1]))
+        if d > cutoff:
+            out.distance[i] = math.inf
+            if full:
+                out.index[i], out.feature[i], out.flag[i] = -1, -1, False
+                out.sqr_distance[i] = math.inf
+                out.point[i] = out.extra[i] = np.nan
+            continue
         out.distance[i] = d
         if full:
             out.index[i] = idx

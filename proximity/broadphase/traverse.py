@@ -53,9 +53,9 @@ _OUTPUTS = types.NamedTuple(
      types.Array(types.int64, 1, "C"), _OUT1],
     Outputs,
 )  # fmt: skip
-# (block, tree, depth, magnitude, points, order, outputs, full)
+# (block, tree, depth, magnitude, points, order, outputs, full, cutoff)
 _BLOCK_SIGNATURE = types.void(
-    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean
+    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64
 )
 _LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
 
@@ -75,10 +75,15 @@ LOW = HIGH = 0
 ROW = NEXT = CALL = None
 
 
-def _search_block(block, tree, depth, magnitude, points, order, out, full):
+def _search_block(block, tree, depth, magnitude, points, order, out, full, cutoff):
     """Nearest primitive to each point of ``block`` (points ``block * BLOCK``
     on, in the sequence ``order``); with ``full=False`` only the distances
     and ``undecided`` are written.
+
+    ``cutoff`` (``inf`` for none) bounds the search from the start: a point
+    with nothing within it gets an infinite distance, and no primitive
+    farther is visited.  The answers within it are those without a cutoff:
+    the pruning never skips a primitive at most ``cutoff`` away.
 
     ``tree`` is a :data:`TreeArrays` record (the primitives in leaf order,
     their cull rows, the nodes as :class:`~.tree.Tree` describes them),
@@ -120,10 +125,10 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
             s = _scale(px, py, pz, magnitude)
             qx, qy, qz = px * s, py * s, pz * s
-            cap = math.inf  # scaled upper bound on the answer
+            cap = cutoff * s  # scaled upper bound on the answer (exact: s is a power of two)
             if SEED_POINT and not math.isnan(near_x):
                 dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
-                cap = math.sqrt(dx * dx + dy * dy + dz * dz)
+                cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz))
             reach = cap + SLACK  # scaled distance beyond which primitives are skipped
             limit = reach * reach  # its square, for the boxes
             node = 0
@@ -192,7 +197,21 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
             near_x, near_y, near_z = w_x, w_y, w_z
         # An undecided answer could be the least (or tie with it): resolve
         # every candidate up to the bound exactly, outside the kernel.
-        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
+        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
+        finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+        if best > cutoff or (best_k < 0 and cutoff < math.inf and finite):
+            # Nothing within the cutoff (or an answer beyond it).
+            best_k = -1
+            dist[i] = math.inf
+            if full:
+                sqr[i] = math.inf
+                for c in range(3):
+                    point[i, c] = math.nan
+                    extra[i, c] = math.nan
+                feature[i] = NONE
+                flag[i] = False
+                prim[i] = -1
+            continue
         if best_k < 0:
             dist[i] = math.nan
             if full:
@@ -240,10 +259,10 @@ def _less(lo, hi, radius):
     return lo - radius - w, hi - radius + w
 
 
-def _loop(handle, tree, depth, magnitude, points, order, out, full):
+def _loop(handle, tree, depth, magnitude, points, order, out, full, cutoff):
     """:func:`_search_block` for every block of points, on the threads."""
     for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
-        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full)
+        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full, cutoff)
 
 
 def _link(kinds, q, k, px, py, pz):
