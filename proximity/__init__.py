@@ -45,6 +45,7 @@ from ._counts import stats as certified_stats  # noqa: E402
 from ._threads import threads  # noqa: E402
 from .inflated import Capsule, Inflated, Sphere  # noqa: E402
 from .mesh import TriangleMesh  # noqa: E402
+from .posed import Posed  # noqa: E402
 from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
@@ -70,6 +71,7 @@ __all__ = [
     "MeshResult",
     "Point",
     "PointResult",
+    "Posed",
     "Result",
     "Scene",
     "SceneResult",
@@ -90,7 +92,7 @@ __all__ = [
 __version__ = "0.1.0"
 
 
-_SHAPES = (Triangle, Segment, Point, Circle, Disk, TriangleMesh, Scene, Inflated, Sphere, Capsule)
+_SHAPES = (Triangle, Segment, Point, Circle, Disk, TriangleMesh, Scene, Inflated, Sphere, Capsule, Posed)
 _SHAPE_TYPES = frozenset(_SHAPES)
 
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _lazy, _threads
 from ._validate import as_float64, cutoff, freeze_result, frozen
+from .primitives import N_PARAMS
 from .results import attach
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
@@ -60,6 +61,9 @@ class Collection(Frozen):
     def __getstate__(self):
         state = super().__getstate__()
         tree = state.pop("_tree")
+        if tree is None:  # a scene of posed meshes alone: its instances have the trees
+            state["_tree"] = None
+            return state
         state["_hierarchy"] = {
             "index": tree.index,
             "child": tree.child,
@@ -74,6 +78,8 @@ class Collection(Frozen):
         super().__setstate__(state)
         if hierarchy is not None:  # else the state holds the tree itself
             object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
+            if self._derived:  # derived from the tree too
+                self._init(**self._derive())
 
     def _restore_tree(self, hierarchy):
         broadphase = _lazy.load("proximity.broadphase")
@@ -99,12 +105,21 @@ class Collection(Frozen):
         out_shape = points.shape[:-1]
         # A method's closest point may leave a primitive's box (``Method.loose``,
         # the seed's circle); the hierarchy then has looser boxes for it.
-        loose = self._tree.loose and method.loose
+        instanced = getattr(self, "_instanced", None)
+        trees = (self._tree,) if instanced is None else instanced.trees
+        loose = any(tree.loose for tree in trees) and method.loose
         with _threads.kernel():
             broadphase = _lazy.load("proximity.broadphase")
             flat = points.reshape(-1, 3)
-            out = broadphase.nearest(self._tree, method, flat, full, loose=loose, cutoff=limit)
-        if self._tree.radius >= 0:
+            if instanced is None:
+                out = broadphase.nearest(self._tree, method, flat, full, loose=loose, cutoff=limit)
+            else:
+                instances = _lazy.load("proximity.broadphase.instances")
+                arrays = instanced.arrays[loose]
+                out = instances.nearest_instances(
+                    trees, arrays, method, flat, full, loose=loose, cutoff=limit
+                )
+        if any(tree.radius >= 0 for tree in trees):
             self._rounded(out, points.reshape(-1, 3), full)
         return out_shape, out
 
@@ -122,7 +137,7 @@ class Collection(Frozen):
         index = out["index"]
         found = index >= 0
         kinds, params = self._primitives(np.where(found, index, 0))
-        radius = np.where(found, params[:, self._tree.radius], np.nan)
+        radius = np.where(found, params[:, -1] if params.shape[1] > N_PARAMS else 0.0, np.nan)
         with np.errstate(invalid="ignore"):
             core = signed + radius
         rows_of = lambda rows: (kinds[rows], params[rows])  # noqa: E731
@@ -135,6 +150,21 @@ class Collection(Frozen):
             away = (points - out["point"]) / distance[:, None]
         fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
         out["normal"] = outward(out["point"], on_core, radius, fallback)
+
+    def transformed(self, transform):
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
 
     def inflated(self, radius):
         """The points within ``radius`` of the collection's surface: a thick

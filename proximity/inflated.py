@@ -98,6 +98,21 @@ class Inflated(Frozen):
     def __repr__(self):
         return format_repr(self, ("radius",), core=self.core)
 
+    def transformed(self, transform):
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
+
     def inflated(self, radius):
         """The points within ``radius`` of this rounded shape: the core
         inflated by the sum of the radii (rounded to a float)."""

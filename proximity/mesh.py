@@ -12,7 +12,7 @@ every face, and why that never changes the answer, is in
 
 import numpy as np
 
-from . import _lazy
+from . import _lazy, _threads
 from ._collection import Collection
 from ._validate import as_array, as_float64, freeze_result, frozen, frozen_float64, require_finite
 from .primitives import TRIANGLE
@@ -262,8 +262,58 @@ class TriangleMesh(Collection):
             inside[rows] = _signed.winding_numbers(self.vertices, self.faces, flat[rows]) > 0.5
         return out_shape, distance, inside
 
+    def with_vertices(self, vertices):
+        """The mesh with the same faces over moved ``vertices``: its hierarchy
+        refitted, not rebuilt.
+
+        The tree keeps its structure and its node bounds are fitted again to
+        the moved faces, in about a fifth of a build's time or less; the
+        answers are those of a mesh built afresh on the new vertices, bit for
+        bit (the search's pruning holds for any tree, and ties go to the
+        lowest face either way).  What a refit loses is speed: a tree built
+        for one shape prunes less for a much deformed one, whose faces have
+        moved far within it.  Rebuild (``TriangleMesh(vertices, faces)``) when
+        the deformation is large against the faces' size, or every so many
+        frames (``docs/performance.md`` measures the loss).
+
+        Parameters
+        ----------
+        vertices : array_like, shape ``(V, 3)``
+            Finite, as many as the mesh's.
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> square = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+        ...                                 [[0, 1, 2], [0, 2, 3]])
+        >>> lifted = square.with_vertices(square.vertices + [0, 0, 2])
+        >>> float(lifted.distance([0.5, 0.5, 0.0]))
+        2.0
+        """
+        v = frozen_float64(vertices, "vertices", f"({len(self.vertices)}, 3)")
+        if v.shape != self.vertices.shape:
+            expected = self.vertices.shape
+            raise ValueError(f"vertices must have shape {expected}, the mesh's; got shape {v.shape}")
+        require_finite(v, "vertices")
+        tree = self._tree
+        # A build leaves out exact copies of a face; moved, they may no longer be
+        # copies, so such a mesh is built again.
+        if len(tree.index) != len(self.faces):
+            return TriangleMesh(v, self.faces, broad_phase=self.broad_phase)
+        # The moved faces' rows in leaf order and their bounds; the nodes refitted.
+        with _threads.kernel():
+            broadphase = _lazy.load("proximity.broadphase")
+            params = broadphase.face_params(v, self.faces, tree.index)
+            moved = broadphase.assemble(tree.kinds, params, tree.index, tree.child, tree.count, tree.depth)
+        mesh = object.__new__(TriangleMesh)
+        mesh._init(vertices=v, faces=self.faces, broad_phase=self.broad_phase, _tree=moved, _signs=None)
+        return mesh
+
     def _nearest_index(self, result):
         return np.asarray(result.face)
+
+    def _kind_codes(self):
+        return np.full(len(self.faces), TRIANGLE.code, np.int8)
 
     def _surface_normals(self, result, rows, members):
         """The normals at the closest points of rows ``rows`` (on the mesh):

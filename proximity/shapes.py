@@ -203,6 +203,21 @@ class _Facade(Frozen):
             args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
         return type(self)(*args)
 
+    def transformed(self, transform):
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
+
     def inflated(self, radius):
         """The points within ``radius`` of the shape: a rounded solid
         (:class:`proximity.Inflated`), ``radius`` broadcasting with the batch.

@@ -63,7 +63,7 @@ _LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
 # the primitives' evaluation and interval (chains over the kinds, see
 # :func:`_chain`), whether the method has an exact fallback, and whether the
 # previous point's answer may seed the search.
-EVALUATE = INTERVAL = None
+EVALUATE = INTERVAL = DESCEND = None
 EXACT_FALLBACK = False
 SEED_POINT = True
 # The column of the rows' radii where the tree holds rounded primitives
@@ -73,6 +73,93 @@ RADIUS = -1
 # function, and the rest of the chain.
 LOW = HIGH = 0
 ROW = NEXT = CALL = None
+
+
+def _descend(
+    tree, root, stack_node, stack_sqr, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset, state
+):
+    """Search ``tree`` from node ``root`` for the point ``P`` (finite), updating ``state``.
+
+    ``state`` is the best answer so far: ``(best, best_index, best_k, upper,
+    lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag)``, as
+    :func:`_search_block` keeps it; nothing beyond ``min(best, cap)`` (and the
+    previous closest point ``near``, unless NaN) is visited.  ``offset`` is
+    added to the tree's primitive indices (the instances of a scene number
+    their primitives after each other's).
+    """
+    kinds, params, index, cull, bounds, child, count = tree
+    best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state
+    s = _scale(px, py, pz, magnitude)
+    qx, qy, qz = px * s, py * s, pz * s
+    cap = min(cap, best) * s  # scaled upper bound on the answer (exact: s is a power of two)
+    if SEED_POINT and not math.isnan(near_x):
+        dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
+        cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz))
+    reach = cap + SLACK  # scaled distance beyond which primitives are skipped
+    limit = reach * reach  # its square, for the boxes
+    node = root
+    sp = 0
+    while True:
+        first, c = child[node], count[node]
+        if c > 0:
+            for k in range(first, first + c):
+                if _culled(cull, k, s, qx, qy, qz, reach):
+                    continue
+                r = EVALUATE(kinds, params, k, px, py, pz)
+                if RADIUS >= 0:
+                    # A rounded primitive: d - R, ranked signed (negative inside).
+                    r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
+                certain = True
+                if EXACT_FALLBACK:
+                    if r[0] != certified.CERTAIN:
+                        certain = False
+                        lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                        if RADIUS >= 0:
+                            lo, hi = _less(lo, hi, params[k, RADIUS])
+                        lowest = min(lowest, lo)
+                        upper = min(upper, hi)
+                if certain:
+                    d = r[1]
+                    idx = index[k] + offset
+                    if d < best or (d == best and idx < best_index):
+                        best = d
+                        best_index = idx
+                        best_k = k
+                        w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                        w_feature = r[6]
+                        w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                        w_flag = r[10]
+                if RADIUS >= 0:
+                    # The best may be negative (inside a rounded primitive).
+                    reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
+                else:
+                    reach = min(min(best, upper) * s, cap) + SLACK
+                limit = reach * reach
+            node = -1
+        else:
+            left = child[node]
+            right = left + 1
+            dl = _bound_sqr(bounds, left, s, qx, qy, qz)
+            dr = _bound_sqr(bounds, right, s, qx, qy, qz)
+            if dr < dl:
+                left, right, dl, dr = right, left, dr, dl
+            if dl <= limit:
+                if dr <= limit:
+                    stack_node[sp] = right
+                    stack_sqr[sp] = dr
+                    sp += 1
+                node = left
+            else:
+                node = -1
+        if node < 0:
+            while sp > 0:
+                sp -= 1
+                if stack_sqr[sp] <= limit:
+                    node = stack_node[sp]
+                    break
+            if node < 0:
+                break
+    return best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag
 
 
 def _search_block(block, tree, depth, magnitude, points, order, out, full, cutoff):
@@ -123,76 +210,14 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
         w_feature = NONE
         w_flag = False
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-            s = _scale(px, py, pz, magnitude)
-            qx, qy, qz = px * s, py * s, pz * s
-            cap = cutoff * s  # scaled upper bound on the answer (exact: s is a power of two)
-            if SEED_POINT and not math.isnan(near_x):
-                dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
-                cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz))
-            reach = cap + SLACK  # scaled distance beyond which primitives are skipped
-            limit = reach * reach  # its square, for the boxes
-            node = 0
-            sp = 0
-            while True:
-                first, c = child[node], count[node]
-                if c > 0:
-                    for k in range(first, first + c):
-                        if _culled(cull, k, s, qx, qy, qz, reach):
-                            continue
-                        r = EVALUATE(kinds, params, k, px, py, pz)
-                        if RADIUS >= 0:
-                            # A rounded primitive: d - R, ranked signed (negative inside).
-                            r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
-                        certain = True
-                        if EXACT_FALLBACK:
-                            if r[0] != certified.CERTAIN:
-                                certain = False
-                                lo, hi = INTERVAL(kinds, params, k, px, py, pz)
-                                if RADIUS >= 0:
-                                    lo, hi = _less(lo, hi, params[k, RADIUS])
-                                lowest = min(lowest, lo)
-                                upper = min(upper, hi)
-                        if certain:
-                            d = r[1]
-                            idx = index[k]
-                            if d < best or (d == best and idx < best_index):
-                                best = d
-                                best_index = idx
-                                best_k = k
-                                w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
-                                w_feature = r[6]
-                                w_a0, w_a1, w_a2 = r[7], r[8], r[9]
-                                w_flag = r[10]
-                        if RADIUS >= 0:
-                            # The best may be negative (inside a rounded primitive).
-                            reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
-                        else:
-                            reach = min(min(best, upper) * s, cap) + SLACK
-                        limit = reach * reach
-                    node = -1
-                else:
-                    left = child[node]
-                    right = left + 1
-                    dl = _bound_sqr(bounds, left, s, qx, qy, qz)
-                    dr = _bound_sqr(bounds, right, s, qx, qy, qz)
-                    if dr < dl:
-                        left, right, dl, dr = right, left, dr, dl
-                    if dl <= limit:
-                        if dr <= limit:
-                            stack_node[sp] = right
-                            stack_sqr[sp] = dr
-                            sp += 1
-                        node = left
-                    else:
-                        node = -1
-                if node < 0:
-                    while sp > 0:
-                        sp -= 1
-                        if stack_sqr[sp] <= limit:
-                            node = stack_node[sp]
-                            break
-                    if node < 0:
-                        break
+            state = (
+                best, best_index, best_k, upper, lowest,
+                w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag,
+            )  # fmt: skip
+            near = (near_x, near_y, near_z)
+            state = DESCEND(tree, 0, stack_node, stack_sqr, magnitude, px, py, pz, cutoff, *near, 0, state)
+            best, best_index, best_k, upper, lowest = state[:5]
+            w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
         if best_k >= 0:
             near_x, near_y, near_z = w_x, w_y, w_z
         # An undecided answer could be the least (or tie with it): resolve
@@ -300,25 +325,36 @@ def _chain(present, make, tag):
 
 
 @functools.cache
+def descent(method, present, radius=-1):
+    """:func:`_descend` compiled for ``method``, the kinds ``present`` and the radius column."""
+    tag = method.name
+    names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
+    return specialize(
+        _descend,
+        f"{tag}__{names}",
+        role="inline",
+        EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method), tag),
+        INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p), "interval"),
+        EXACT_FALLBACK=method.exact_fallback,
+        SEED_POINT=not method.loose,
+        RADIUS=radius,
+    )
+
+
+@functools.cache
 def search_kernel(method, present, radius=-1):
     """The compiled search of ``method`` over trees holding the kinds
     ``present`` (:class:`~proximity.primitives.Primitive` records), with
     their radii in column ``radius`` of the rows (-1: none), as a function
     of the loop's arguments but the handle."""
     tag = method.name
-    evaluate = _chain(present, lambda p: p.kernels.row_query(p, method), tag)
-    interval = _chain(present, lambda p: p.kernels.row_interval(p), "interval")
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     block = specialize(
         _search_block,
         f"{tag}__{names}",
         _BLOCK_SIGNATURE,
         role="pointer",
-        EVALUATE=evaluate,
-        INTERVAL=interval,
-        EXACT_FALLBACK=method.exact_fallback,
-        SEED_POINT=not method.loose,
-        RADIUS=radius,
+        DESCEND=descent(method, present, radius),
     )
     return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
 
