@@ -6,6 +6,11 @@ should answer their first query at once run this command after installing,
 where the cache is writable, to compile every method of every shape and
 path.  It prints each kernel as it is done.
 
+Without it, the first query of a process that finds a kernel missing from
+the cache prints one line on stderr saying what it compiles and roughly how
+long that takes; ``PROXIMITY_QUIET=1`` in the environment silences it (see
+:mod:`proximity._notice`).
+
 Examples
 --------
 >>> import proximity.compile
