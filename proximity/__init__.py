@@ -99,9 +99,12 @@ def _check(shape):
     # (which inspects every attribute): the function form costs what the method does.
     if type(shape) in _SHAPE_TYPES or isinstance(shape, _SHAPES):
         return shape
+    from ._meshlike import looks_like_a_mesh
+
+    hint = "; use proximity.TriangleMesh(mesh) first" if looks_like_a_mesh(shape) else ""
     raise TypeError(
-        "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
-        f"got {type(shape).__name__}"
+        f"shape must be a proximity shape ({', '.join(s.__name__ for s in _SHAPES)}); "
+        f"got {type(shape).__name__}{hint}"
     )
 
 

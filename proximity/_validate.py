@@ -16,6 +16,28 @@ def as_array(value, name, expected, dtype=None):
         raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
 
 
+def as_index_array(value, name, expected):
+    """``value`` as an integer array, or a ValueError naming ``name``.
+
+    Floats are taken where every one is a whole number (a face list read by
+    ``np.loadtxt``, which reads floats); others are refused with the first
+    that is not, and booleans and other dtypes are refused.
+    """
+    array = as_array(value, name, expected)
+    if array.dtype.kind in "iu":
+        return array
+    if array.dtype.kind == "f":
+        whole = np.isfinite(array) & (array == np.round(array)) & (np.abs(array) < 2.0**63)
+        if whole.all():
+            return array.astype(np.int64)
+        index = tuple(int(i) for i in np.argwhere(~whole)[0])
+        raise ValueError(
+            f"{name} must be integers, an array of shape {expected}; got {array[index]} at index "
+            f"{index} of a {array.dtype} array, not a whole number"
+        )
+    raise ValueError(f"{name} must be an integer array of shape {expected}; got dtype {array.dtype}")
+
+
 def _real(value, name, expected):
     array = as_array(value, name, expected)
     if array.dtype.kind not in _REAL:
