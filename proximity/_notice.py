@@ -65,7 +65,7 @@ def describe(func):
     else:
         what, seconds = _BATCH
     method = _method(name)
-    return (f"{method} {what}" if method else what), seconds
+    return (f"{method} kernels of {what}" if method else f"kernels of {what}"), seconds
 
 
 def compiling(func):
@@ -81,7 +81,7 @@ def compiling(func):
         return
     what, seconds = describe(func)
     print(
-        f"proximity: compiling the kernels of {what}, once for this machine ({seconds}; later runs "
+        f"proximity: compiling the {what}, once for this machine ({seconds}; later runs "
         f"load them from the disk cache).  Run `python -m proximity.compile` to compile them all ahead; "
         f"set {QUIET}=1 to hide this line.",
         file=sys.stderr,

@@ -142,7 +142,7 @@ def test_a_cold_compile_says_so_once_and_a_warm_run_says_nothing(tmp_path):
     assert cold.stdout.strip() == "5.0"
     lines = cold.stderr.splitlines()
     assert len(lines) == 1, cold.stderr
-    assert lines[0].startswith("proximity: compiling the kernels of robust one-point queries")
+    assert lines[0].startswith("proximity: compiling the robust kernels of one-point queries")
     assert "python -m proximity.compile" in lines[0] and "PROXIMITY_QUIET=1" in lines[0]
     warm = _first_point(tmp_path / "cache")
     assert warm.returncode == 0, warm.stderr
@@ -161,7 +161,7 @@ def test_the_compile_line_is_printed_once_and_can_be_silenced(monkeypatch, capsy
     _notice.compiling(_robust_block__robust__e1b9)
     _notice.compiling(_robust_block__robust__e1b9)
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "the kernels of robust batch queries" in err
+    assert err.count("\n") == 1 and "the robust kernels of batch queries" in err
     monkeypatch.setattr(_notice, "_said", False)
     monkeypatch.setenv("PROXIMITY_QUIET", "1")
     _notice.compiling(_robust_block__robust__e1b9)
@@ -173,4 +173,4 @@ def test_the_compile_line_names_the_hierarchy_for_meshes():
     from proximity.broadphase import build
 
     what, seconds = _notice.describe(build.build_tree)
-    assert what.startswith("meshes and scenes") and seconds
+    assert what.startswith("kernels of meshes and scenes") and seconds
