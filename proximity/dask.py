@@ -24,8 +24,8 @@ whole process, and concurrent queries share them.  With Dask's
 ``processes`` scheduler, or with Numba's OpenMP layer, pass ``threads``:
 the cores divided by the tasks that run at once.
 
-Dask is imported when a function is called: ``pip install
-'proximity3d[scale]'`` installs it.
+Dask is imported when a function is called: ``pip install '.[scale]'``
+in proximity's clone installs it.
 """
 
 import collections
@@ -43,7 +43,7 @@ from .shapes import DEFAULT_METHOD, Frozen, check_method
 
 __all__ = ["closest_point", "distance", "records"]
 
-INSTALL = "pip install 'proximity3d[scale]'"
+INSTALL = "pip install '.[scale]' in proximity's clone"
 
 #: Rows per chunk when ``points`` is a NumPy array: 24 MB of float64 points.
 CHUNK_ROWS = 1_000_000

@@ -163,7 +163,7 @@ def test_the_core_install_imports_without_dask_and_says_how_to_get_it():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert "pip install 'proximity3d[scale]'" in done.stdout
+    assert "pip install '.[scale]' in proximity's clone" in done.stdout
     done = subprocess.run(
         [sys.executable, "-c", "import sys, proximity; print('dask' in sys.modules)"],
         capture_output=True, text=True, timeout=120,
