@@ -1,10 +1,24 @@
 """Validation at the boundary: every check happens here, never in a kernel."""
 
 import dataclasses
+import inspect
 
 import numpy as np
 
 _REAL = frozenset("iuf")
+
+
+def keyword_only_signature(func):
+    """``func``, its signature shown without its ``*args``.
+
+    The public queries take ``*args`` only to answer ``method`` passed by
+    position with a message saying it is keyword-only; ``help()`` and the
+    documentation show what they accept: ``(shape, points, *, method=...)``.
+    """
+    signature = inspect.signature(func)
+    kept = [p for p in signature.parameters.values() if p.kind is not p.VAR_POSITIONAL]
+    func.__signature__ = signature.replace(parameters=kept)
+    return func
 
 
 def as_array(value, name, expected, dtype=None):

@@ -522,7 +522,8 @@ def _worker_peak_rss():
     return peak_rss()
 
 
-def parse(argv):
+def parser():
+    """The command's argument parser."""
     from .mesh import SIGNS
     from .methods import REGISTRY
 
@@ -565,17 +566,25 @@ def parse(argv):
         "--no-progress", dest="progress", action="store_false", help="no progress; the last line stays"
     )
     parser.add_argument("--summary", metavar="FILE", help="write timings and peak memory as JSON to FILE")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def parse(argv):
+    """The command's arguments, checked."""
+    from .mesh import SIGNS
+
+    command = parser()
+    args = command.parse_args(argv)
     if args.sign is not None:
         args.signed = True
     elif args.signed:
         args.sign = SIGNS[0]
     if args.chunk < 1:
-        parser.error(f"--chunk must be at least 1; got {args.chunk}")
+        command.error(f"--chunk must be at least 1; got {args.chunk}")
     if args.workers is not None and args.workers < 1:
-        parser.error(f"--workers must be at least 1; got {args.workers}")
+        command.error(f"--workers must be at least 1; got {args.workers}")
     if args.threads is not None and args.threads < 1:
-        parser.error(f"--threads must be at least 1; got {args.threads}")
+        command.error(f"--threads must be at least 1; got {args.threads}")
     return args
 
 

@@ -134,7 +134,8 @@ def compile_all(methods=None, log=sys.stdout):
     return done
 
 
-def main(argv=None):
+def parser():
+    """The command's argument parser."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.compile",
         description="Compile proximity's kernels into the disk cache, so that first queries start at once.",
@@ -145,7 +146,11 @@ def main(argv=None):
         choices=list(_methods.REGISTRY),
         help="compile only this method (repeatable); default: every method",
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
     from . import _cache
 
     if not _cache.CACHE:
