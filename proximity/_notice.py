@@ -30,10 +30,15 @@ QUIET = "PROXIMITY_QUIET"
 # What a first use compiles, from where its first kernel that misses the
 # cache is defined, and roughly how many seconds of one core the whole first
 # use compiles (the kernels of that use together, measured cold).
-_BROAD_PHASE = ("meshes and scenes (hierarchy build and nearest-face search)", "10 to 20 s")
+# The first mesh or scene compiles its broad phase before it knows whether
+# it builds a hierarchy (more than four primitives), which compiles the most.
+_BROAD_PHASE = (
+    "meshes and scenes (hierarchy build and nearest-face search)",
+    "a few seconds, up to about 20 s for a first hierarchy",
+)
 _SIGNS = ("the winding number of signed distances", "about 1 s")
-_SINGLE = ("one-point queries", "1 to 3 s")
-_BATCH = ("batch queries", "2 to 5 s")
+_SINGLE = ("one-point queries", "about 1 to 3 s")
+_BATCH = ("batch queries", "about 2 to 5 s")
 
 _lock = threading.Lock()
 _said = False
