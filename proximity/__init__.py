@@ -43,6 +43,7 @@ _map_source_adapters()
 from . import _pool  # noqa: E402
 from ._counts import stats as certified_stats  # noqa: E402
 from ._threads import threads  # noqa: E402
+from ._validate import keyword_only_signature  # noqa: E402
 from .inflated import Capsule, Inflated, Sphere  # noqa: E402
 from .mesh import TriangleMesh  # noqa: E402
 from .posed import Posed  # noqa: E402
@@ -101,37 +102,56 @@ def _check(shape):
     # (which inspects every attribute): the function form costs what the method does.
     if type(shape) in _SHAPE_TYPES or isinstance(shape, _SHAPES):
         return shape
+    from ._meshlike import looks_like_a_mesh
+
+    hint = "; use proximity.TriangleMesh(mesh) first" if looks_like_a_mesh(shape) else ""
     raise TypeError(
-        "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
-        f"got {type(shape).__name__}"
+        f"shape must be a proximity shape ({', '.join(s.__name__ for s in _SHAPES)}); "
+        f"got {type(shape).__name__}{hint}"
     )
 
 
+@keyword_only_signature
 def closest_point(shape, points, *args, method=DEFAULT_METHOD):
     """Closest point on ``shape`` to each of ``points``.
+
+    The function form of ``shape.closest_point(points, method=method)``.
 
     Parameters
     ----------
     shape : Shape
-        A :class:`Triangle`, :class:`Circle` or :class:`Disk` (or a batch).
-    points : array_like, shape ``(..., D)``
-        Query points.  Their leading dimensions broadcast against the shape's
-        batch dimensions like a NumPy ufunc: ``(N, D)`` against one shape,
-        ``(N, D)`` against ``N`` shapes pairwise, ``(N, 1, D)`` against ``M``
-        shapes for all pairs.  Rows containing NaN or inf give NaN (feature
-        ``Feature.NONE``) in those rows only.
-    method : {"robust", "certified", "eberly"}, keyword-only
-        ``robust`` (default) is accurate to ``8 eps S + 2^-1075`` on every finite input;
-        ``certified`` is faithfully rounded (within one ulp of the exact
-        distance) with the exact closest feature; ``eberly`` is Eberly's
-        algorithm as written, kept as a baseline (NaN on zero-area
-        triangles).
+        Any shape of the package: a :class:`Triangle`, :class:`Segment`,
+        :class:`Point`, :class:`Circle` or :class:`Disk` (one, or a batch of
+        them), a :class:`TriangleMesh`, a :class:`Scene`, or a rounded shape
+        (:class:`Sphere`, :class:`Capsule`, :class:`Inflated`).  A mesh of
+        another library (trimesh, Open3D, ...) is not one: wrap it in
+        :class:`TriangleMesh` first.
+    points : array_like, shape ``(..., 3)``
+        Query points.  Against a batch of primitives, their leading
+        dimensions broadcast against the batch's like a NumPy ufunc:
+        ``(N, 3)`` against one shape, ``(N, 3)`` against ``N`` shapes
+        pairwise, ``(N, 1, 3)`` against ``M`` shapes for all pairs.  Against
+        a mesh, a scene or one shape, any ``(..., 3)``.  Rows containing NaN
+        or inf give NaN (feature ``Feature.NONE``) in those rows only.
+    method : str, keyword-only
+        One of ``shape.methods``.  ``"robust"`` (the default) is accurate
+        to a few units of rounding of the query's size on every finite
+        input; ``"certified"`` gives the distance within one unit in the
+        last place of the exact one, and the exact closest feature;
+        ``"eberly"`` (triangles, circles, disks and meshes) is Eberly's
+        algorithm as written, kept as a baseline.  The bounds are in
+        ``docs/accuracy.md``.
 
     Returns
     -------
-    TriangleResult, DiskResult or CircleResult
-        Frozen result of arrays of the broadcast shape: ``distance``,
-        ``sqr_distance``, ``point``, ``feature`` and the shape's parameters.
+    Result
+        The shape's result type (``shape.result_type``): a frozen result of
+        arrays of the broadcast shape, with ``distance``, ``sqr_distance``,
+        ``point`` and ``feature``, and the shape's own fields (barycentric
+        coordinates for triangles, ``face`` for meshes, ``primitive`` for
+        scenes, ...): :class:`TriangleResult`, :class:`SegmentResult`,
+        :class:`PointResult`, :class:`DiskResult`, :class:`CircleResult`,
+        :class:`MeshResult` or :class:`SceneResult`.
 
     Examples
     --------
@@ -155,12 +175,28 @@ def closest_point(shape, points, *args, method=DEFAULT_METHOD):
     return shape.closest_point(points, method=method)
 
 
+@keyword_only_signature
 def distance(shape, points, *args, method=DEFAULT_METHOD):
     """Distance from each of ``points`` to ``shape``.
 
-    Parameters and broadcasting are those of :func:`closest_point`; only the
-    distances are computed and returned, as an array of the broadcast shape
-    (a NumPy scalar for one point against one shape).
+    The function form of ``shape.distance(points, method=method)``: any
+    shape, points and method of :func:`closest_point` (a mesh, a scene, a
+    rounded shape, a batch of primitives), the distances alone computed.
+
+    Parameters
+    ----------
+    shape : Shape
+        As in :func:`closest_point`.
+    points : array_like, shape ``(..., 3)``
+        As in :func:`closest_point`.
+    method : str, keyword-only
+        As in :func:`closest_point`; default ``"robust"``.
+
+    Returns
+    -------
+    ndarray of float64, read-only
+        The distances, of the broadcast shape (a NumPy scalar for one point
+        against one shape); NaN where a point is not finite.
 
     Examples
     --------

@@ -1,11 +1,25 @@
 """Validation at the boundary: every check happens here, never in a kernel."""
 
 import dataclasses
+import inspect
 import math
 
 import numpy as np
 
 _REAL = frozenset("iuf")
+
+
+def keyword_only_signature(func):
+    """``func``, its signature shown without its ``*args``.
+
+    The public queries take ``*args`` only to answer ``method`` passed by
+    position with a message saying it is keyword-only; ``help()`` and the
+    documentation show what they accept: ``(shape, points, *, method=...)``.
+    """
+    signature = inspect.signature(func)
+    kept = [p for p in signature.parameters.values() if p.kind is not p.VAR_POSITIONAL]
+    func.__signature__ = signature.replace(parameters=kept)
+    return func
 
 
 def as_array(value, name, expected, dtype=None):
@@ -15,6 +29,28 @@ def as_array(value, name, expected, dtype=None):
         return np.asarray(value, dtype=dtype)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
+
+
+def as_index_array(value, name, expected):
+    """``value`` as an integer array, or a ValueError naming ``name``.
+
+    Floats are taken where every one is a whole number (a face list read by
+    ``np.loadtxt``, which reads floats); others are refused with the first
+    that is not, and booleans and other dtypes are refused.
+    """
+    array = as_array(value, name, expected)
+    if array.dtype.kind in "iu":
+        return array
+    if array.dtype.kind == "f":
+        whole = np.isfinite(array) & (array == np.round(array)) & (np.abs(array) < 2.0**63)
+        if whole.all():
+            return array.astype(np.int64)
+        index = tuple(int(i) for i in np.argwhere(~whole)[0])
+        raise ValueError(
+            f"{name} must be integers, an array of shape {expected}; got {array[index]} at index "
+            f"{index} of a {array.dtype} array, not a whole number"
+        )
+    raise ValueError(f"{name} must be an integer array of shape {expected}; got dtype {array.dtype}")
 
 
 def _real(value, name, expected):

@@ -6,6 +6,11 @@ should answer their first query at once run this command after installing,
 where the cache is writable, to compile every method of every shape and
 path.  It prints each kernel as it is done.
 
+Without it, the first query of a process that finds a kernel missing from
+the cache prints one line on stderr saying what it compiles and roughly how
+long that takes; ``PROXIMITY_QUIET=1`` in the environment silences it (see
+:mod:`proximity._notice`).
+
 Examples
 --------
 >>> import proximity.compile
@@ -129,8 +134,8 @@ def compile_all(methods=None, log=sys.stdout):
     return done
 
 
-def main(argv=None):
-    """Run ``python -m proximity.compile``; returns its exit status."""
+def parser():
+    """The command's argument parser."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.compile",
         description="Compile proximity's kernels into the disk cache, so that first queries start at once.",
@@ -141,7 +146,12 @@ def main(argv=None):
         choices=list(_methods.REGISTRY),
         help="compile only this method (repeatable); default: every method",
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None):
+    """Run ``python -m proximity.compile``; returns its exit status."""
+    args = parser().parse_args(argv)
     from . import _cache
 
     if not _cache.CACHE:

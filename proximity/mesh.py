@@ -14,7 +14,8 @@ import numpy as np
 
 from . import _lazy, _threads
 from ._collection import Collection
-from ._validate import as_array, as_float64, freeze_result, frozen, frozen_float64, require_finite
+from ._meshlike import vertices_and_faces
+from ._validate import as_float64, as_index_array, freeze_result, frozen, frozen_float64, require_finite
 from .primitives import TRIANGLE
 from .results import MeshResult, format_repr
 from .shapes import DEFAULT_METHOD, keyword_only
@@ -30,12 +31,16 @@ class TriangleMesh(Collection):
     Parameters
     ----------
     vertices : array_like, shape ``(V, 3)``, or a mesh object
-        Finite coordinates; or, with ``faces`` left out, any object with
-        ``vertices`` and ``faces`` attributes, such as a ``trimesh.Trimesh``.
+        Finite coordinates; or, with ``faces`` left out, a mesh of another
+        library: a ``trimesh.Trimesh``, an Open3D ``TriangleMesh``, a meshio
+        ``Mesh`` with triangle cells, a triangulated PyVista ``PolyData``,
+        or any object with ``vertices`` (or ``points``) and ``faces`` (or
+        ``triangles``) arrays.
     faces : array_like of int, shape ``(F, 3)``
-        Indices into ``vertices``, ``0 <= index < V``; ``F >= 1``.  Faces may
-        be degenerate and need not form a manifold: the mesh is a triangle
-        soup with shared vertices.
+        Indices into ``vertices``, ``0 <= index < V``; ``F >= 1``.  Floats
+        are taken where every one is a whole number (as ``np.loadtxt``
+        reads a face list).  Faces may be degenerate and need not form a
+        manifold: the mesh is a triangle soup with shared vertices.
     broad_phase : {"auto", "brute", "bvh"}, keyword-only
         ``"bvh"`` builds a bounding-volume hierarchy once, here;
         ``"brute"`` tests every face for every point; ``"auto"`` (default)
@@ -73,19 +78,12 @@ class TriangleMesh(Collection):
 
     def __init__(self, vertices, faces=None, *, broad_phase="auto"):
         if faces is None:
-            if not (hasattr(vertices, "vertices") and hasattr(vertices, "faces")):
-                raise TypeError(
-                    "TriangleMesh takes vertices and faces, or one object with .vertices and .faces "
-                    f"(such as a trimesh.Trimesh); got a {type(vertices).__name__} and no faces"
-                )
-            vertices, faces = vertices.vertices, vertices.faces
+            vertices, faces = vertices_and_faces(vertices)
         v = frozen_float64(vertices, "vertices", "(V, 3)")
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must have shape (V, 3); got shape {v.shape}")
         require_finite(v, "vertices")
-        f = as_array(faces, "faces", "(F, 3)")
-        if f.dtype.kind not in "iu":
-            raise ValueError(f"faces must be an integer array of shape (F, 3); got dtype {f.dtype}")
+        f = as_index_array(faces, "faces", "(F, 3)")
         if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] == 0:
             raise ValueError(f"faces must have shape (F, 3) with F >= 1; got shape {f.shape}")
         if f.min() < 0 or f.max() >= len(v):

@@ -248,7 +248,7 @@ def test_triangle_mesh_takes_a_trimesh_or_any_object_with_vertices_and_faces():
     mesh = TriangleMesh(box)
     assert mesh.faces.tolist() == box.faces.tolist() and mesh.vertices.tolist() == box.vertices.tolist()
     assert float(mesh.distance([0, 0, 3])) == 2.5
-    with pytest.raises(TypeError, match="vertices and faces, or one object with .vertices and .faces"):
+    with pytest.raises(TypeError, match="vertices and faces arrays, or one mesh object with vertices and"):
         TriangleMesh(np.zeros((3, 3)))
 
 

@@ -384,7 +384,7 @@ def test_trimesh_drop_ins_refuse_what_they_cannot_answer():
     from proximity import trimesh_compat
 
     with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
-        trimesh_compat.signed_distance(OCTAHEDRON, [0.0, 0.0, 0.0])
+        trimesh_compat.signed_distance(OCTAHEDRON, [[0.0, 0.0]])
     with pytest.raises(ValueError, match="needs a closed mesh"):
         trimesh_compat.signed_distance((OCTAHEDRON[0], OCTAHEDRON[1][1:]), [[0.0, 0.0, 0.0]])
     with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
