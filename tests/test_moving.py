@@ -132,6 +132,28 @@ def test_instances_share_their_mesh_and_answer_as_the_meshes_built_moved():
         scene.with_poses(np.array(moved[:3]))
 
 
+@pytest.mark.parametrize("skew", [0.0, 1e-10])
+def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
+    # Each instance answers as its posed view alone (the same moved point),
+    # so the scene's answer is the least of theirs, bit for bit, ties to the
+    # lowest primitive; with rotations orthonormal only to ``skew`` too.
+    vertices, faces = icosphere(2)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    poses = []
+    for k in range(20):
+        T = _pose(50 + k, spread=3.0)
+        T[:3, :3] += skew * np.random.default_rng(k).normal(size=(3, 3))
+        poses.append(T)
+    scene = proximity.Scene([mesh.transformed(T) for T in poses])
+    points = np.random.default_rng(5).normal(size=(3000, 3)) * 5
+    got = scene.closest_point(points)
+    each = np.array([mesh.transformed(T).distance(points) for T in poses])
+    least = each.min(axis=0)
+    np.testing.assert_array_equal(got.distance, least)
+    first = np.argmax(each == least, axis=0)
+    np.testing.assert_array_equal(got.source, first)
+
+
 def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit():
     vertices, faces = torus(40, 20)
     mesh = proximity.TriangleMesh(vertices, faces)

@@ -5,16 +5,26 @@ distinct collection, its *prototype*, and per instance only its pose, its
 box in the world and where its primitives are numbered.  A new frame (new
 poses) costs O(instances): the boxes of the prototypes' roots, moved.
 
-A query visits the instances nearest first, by the distance to their world
-boxes, moves the point into each one's frame (``R^T (P - t)``, summed as
+A query bounds each instance's distance from below by the larger of the
+distances to its world box and to its bounding sphere (the sphere of the
+prototype about its root box's centre, through the farthest corner of its
+leaves' boxes: unlike the box, it does not grow when the instance turns).
+It then visits the instances nearest first by that bound, moves the point
+into each one's frame (``R^T (P - t)``, summed as
 :func:`proximity.posed.to_local` sums it) and runs the prototype's search
 there (:func:`.traverse._descend`), with the best answer so far as its
-cutoff.  Distances are the same in every frame (the poses are rigid, within
+cutoff, until the nearest bound left exceeds the best answer.  Distances
+are the same in every frame (the poses are rigid, within
 :data:`proximity.posed.RIGID_TOLERANCE`), so the best over the instances is
 the answer; ties go to the lowest index, the instances numbering their
-primitives one after the other.  An instance is skipped when its world box
-is farther than the best answer plus a slack that covers the rounding of
-the moved boxes (``2^-40`` of the coordinates' magnitude, far more than it).
+primitives one after the other.
+
+The bounds are lowered by a slack before they are compared: ``2^-40``
+(:data:`BOX_SLACK`), far above the rounding of the moved boxes and
+spheres, plus four times the instance's ``max |R^T R - I|``, which covers
+the distance in the instance's frame differing from the distance in the
+world where the rotation is not exactly orthonormal; both relative to the
+coordinates' magnitude.
 """
 
 import collections
@@ -33,14 +43,20 @@ from .traverse import _C1I, _C2F, _OUTPUTS, _TREE, BLOCK, NONE, Outputs, TreeArr
 
 #: The poses and places of the instances: the prototype of each, its rotation
 #: and translation, its world box (low and high corners, and the magnitude of
-#: its coordinates) and the index of its first primitive in the scene.
-InstanceArrays = collections.namedtuple("InstanceArrays", "prototype rotation translation box offset")
+#: its coordinates, world and local), its bounding sphere in the world (centre
+#: and radius), its relative slack, and the index of its first primitive in
+#: the scene.
+InstanceArrays = collections.namedtuple(
+    "InstanceArrays", "prototype rotation translation box sphere slack offset"
+)
 _INSTANCES = types.NamedTuple(
     [
         types.Array(types.int64, 1, "C", readonly=True),
         types.Array(types.float64, 3, "C", readonly=True),
         _C2F,
         _C2F,
+        _C2F,
+        types.Array(types.float64, 1, "C", readonly=True),
         types.Array(types.int64, 1, "C", readonly=True),
     ],
     InstanceArrays,
@@ -84,28 +100,38 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
         winner = -1
         finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
         if finite:
-            # The instances by the distance to their world boxes (insertion sort: few instances).
+            size = max(max(abs(px), abs(py)), abs(pz))
+            # Each instance's lower bound, less its slack (see the module docstring).
             for a in range(m):
                 b = inst.box[a]
                 dx = max(max(b[0] - px, px - b[3]), 0.0)
                 dy = max(max(b[1] - py, py - b[4]), 0.0)
                 dz = max(max(b[2] - pz, pz - b[5]), 0.0)
-                lower[a] = math.sqrt(dx * dx + dy * dy + dz * dz)
-                k = a
-                while k > 0 and lower[visit[k - 1]] > lower[a]:
-                    visit[k] = visit[k - 1]
-                    k -= 1
-                visit[k] = a
-            size = max(max(abs(px), abs(py)), abs(pz))
+                c = inst.sphere[a]
+                sx, sy, sz = px - c[0], py - c[1], pz - c[2]
+                low = max(
+                    math.sqrt(dx * dx + dy * dy + dz * dz), math.sqrt(sx * sx + sy * sy + sz * sz) - c[3]
+                )
+                slack = inst.slack[a]
+                lower[a] = (low - slack * max(size, b[6])) / (1.0 + slack)
+                visit[a] = 0
             cap = cutoff
             if SEED_POINT and not math.isnan(near_x):
                 dx, dy, dz = px - near_x, py - near_y, pz - near_z
                 cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz) * (1.0 + BOX_SLACK) + BOX_SLACK * size)
-            for v in range(m):
-                a = visit[v]
+            while True:
+                # The nearest instance not yet visited: the first descent
+                # usually finds the answer, after which few bounds are below it.
                 bound = max(min(min(best, upper), cap), 0.0)
-                if lower[a] > bound * (1.0 + BOX_SLACK) + BOX_SLACK * max(size, inst.box[a, 6]):
+                a = -1
+                low = math.inf
+                for c in range(m):
+                    if visit[c] == 0 and lower[c] < low:
+                        a = c
+                        low = lower[c]
+                if a < 0 or low > bound:
                     break
+                visit[a] = 1
                 r = inst.rotation[a]
                 t = inst.translation[a]
                 tx, ty, tz = px - t[0], py - t[1], pz - t[2]
@@ -234,22 +260,32 @@ def instance_arrays(trees, prototype, rotation, translation, offset, loose=False
     """The :data:`InstanceArrays` of instances of ``trees[prototype]`` posed by
     ``(rotation, translation)``: their world boxes are the prototypes' root
     boxes moved (eight corners, the box around them, widened by
-    :data:`BOX_SLACK` of their magnitude)."""
+    :data:`BOX_SLACK` of their magnitude), their spheres the prototypes'
+    (:meth:`.tree.Tree.sphere`) moved."""
     roots = np.array([tree.boxes(loose)[0][0, :6] for tree in trees])[prototype]
+    spheres = [tree.sphere(loose) for tree in trees]
+    centre = np.array([c for c, _ in spheres]).reshape(-1, 3)[prototype]
+    radius = np.array([r for _, r in spheres])[prototype]
     corners = np.stack(
         [roots[:, [3 * (c & 1), 1 + 3 * ((c >> 1) & 1), 2 + 3 * ((c >> 2) & 1)]] for c in range(8)], axis=1
     )
     with np.errstate(invalid="ignore", over="ignore"):
         world = _moved(corners, rotation, translation)
         low, high = world.min(axis=1), world.max(axis=1)
-        magnitude = np.maximum(np.abs(low).max(axis=1), np.abs(high).max(axis=1))
+        local = np.abs(roots).max(axis=1)
+        magnitude = np.maximum(np.maximum(np.abs(low).max(axis=1), np.abs(high).max(axis=1)), local)
         widen = (BOX_SLACK * magnitude)[:, None]
+        moved = _moved(centre[:, None], rotation, translation)[:, 0]
+        error = np.abs(np.swapaxes(rotation, -1, -2) @ rotation - np.eye(3)).max(axis=(-1, -2), initial=0.0)
     box = np.concatenate([low - widen, high + widen, magnitude[:, None]], axis=1)
     box = np.where(np.isfinite(box), box, np.where(np.arange(7) < 3, -np.inf, np.inf))
+    sphere = np.concatenate([moved, radius[:, None]], axis=1)
+    sphere = np.where(np.isfinite(sphere).all(axis=1, keepdims=True), sphere, [0.0, 0.0, 0.0, np.inf])
+    slack = BOX_SLACK + 4.0 * np.where(np.isfinite(error), error, np.inf)
     ro = readonly
     return InstanceArrays(
         ro(prototype, np.int64), ro(rotation, np.float64), ro(translation, np.float64),
-        ro(box, np.float64), ro(offset, np.int64),
+        ro(box, np.float64), ro(sphere, np.float64), ro(slack, np.float64), ro(offset, np.int64),
     )  # fmt: skip
 
 
@@ -319,7 +355,8 @@ def _resolve(trees, instances, rows, points, out, full, loose, cutoff):
             b = instances.box[a]
             p = points[i]
             gap = np.sqrt(np.sum(np.maximum(np.maximum(b[:3] - p, p - b[3:6]), 0.0) ** 2))
-            if gap > max(bound, 0.0) * (1 + BOX_SLACK) + BOX_SLACK * max(np.abs(p).max(), b[6]):
+            slack = instances.slack[a]
+            if gap > max(bound, 0.0) * (1 + slack) + slack * max(np.abs(p).max(), b[6]):
                 continue
             tree = trees[instances.prototype[a]]
             local = readonly(to_local(p[None], instances.rotation[a], instances.translation[a]), np.float64)
