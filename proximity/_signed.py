@@ -79,17 +79,15 @@ class Signs:
         n_vertices = len(vertices)
         start = faces.reshape(-1)  # side 3 f + k runs from vertex k of face f to the next
         end = faces[:, [1, 2, 0]].reshape(-1)
-        collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
-        live = np.flatnonzero(~np.repeat(collapsed, 3))
-        key = start[live] * n_vertices + end[live]
-        order = np.argsort(key, kind="stable")
-        keys, sorted_sides = key[order], live[order]
-        twin, self.reason = _twins(keys, sorted_sides, live, start, end, n_vertices)
+        twin, collapsed, self.reason = edge_twins(faces, n_vertices)
         self.closed = self.reason is None
         self.table = self.edge_row = self.longest = None
         if self.closed:
+            live = np.flatnonzero(~np.repeat(collapsed, 3))
+            key = start[live] * n_vertices + end[live]
+            order = np.argsort(key, kind="stable")
             self._normals(vertices, faces, collapsed, twin)
-            self._redirect(collapsed, start, end, keys, sorted_sides, n_vertices)
+            self._redirect(collapsed, start, end, key[order], live[order], n_vertices)
 
     def _normals(self, vertices, faces, collapsed, twin):
         n_vertices, n_faces = len(vertices), len(faces)
@@ -158,16 +156,28 @@ class Signs:
         self.edge_row = edge_row
 
 
-def _twins(keys, sorted_sides, live, start, end, n_vertices):
-    """``(twin side of each side or -1, reason the surface is not closed or None)``."""
+def edge_twins(faces, n_vertices):
+    """``(twin side of each side or -1, collapsed faces, reason the surface is not closed or None)``.
+
+    Side ``3 f + k`` runs from vertex ``k`` of face ``f`` to the next; faces
+    with a repeated vertex index (collapsed) have no sides here.  Closed:
+    every side has exactly one twin, the same edge run the other way.
+    """
+    start = faces.reshape(-1)
+    end = faces[:, [1, 2, 0]].reshape(-1)
+    collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    live = np.flatnonzero(~np.repeat(collapsed, 3))
+    key = start[live] * n_vertices + end[live]
+    order = np.argsort(key, kind="stable")
+    keys, sorted_sides = key[order], live[order]
     twin = np.full(len(start), -1, dtype=np.int64)
     if len(keys) == 0:
-        return twin, None
+        return twin, collapsed, None
     repeated = np.flatnonzero(keys[1:] == keys[:-1])
     if len(repeated):
         first, second = sorted_sides[repeated[0]], sorted_sides[repeated[0] + 1]
         a, b = int(start[first]), int(end[first])
-        return twin, (
+        return twin, collapsed, (
             f"faces {first // 3} and {second // 3} both run edge ({a}, {b}) from {a} to {b}: more than two "
             "faces meet there, or the faces' orientations disagree"
         )
@@ -177,12 +187,12 @@ def _twins(keys, sorted_sides, live, start, end, n_vertices):
     if len(missing):
         side = live[missing[0]]
         a, b = int(start[side]), int(end[side])
-        return twin, (
+        return twin, collapsed, (
             f"edge ({a}, {b}) of face {side // 3} has no face running it from {b} to {a}: the surface has a "
             "boundary there (a hole), or the face on the other side has the opposite orientation"
         )
     twin[live] = sorted_sides[at]
-    return twin, None
+    return twin, collapsed, None
 
 
 def feature_rows(signs, faces, face, feature):
@@ -200,21 +210,24 @@ def feature_rows(signs, faces, face, feature):
     return row, anchor
 
 
-def inside(signs, vertices, faces, points, face, feature, distance):
-    """Whether each point is inside the closed mesh.
+def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding):
+    """``(inside, certain)``: whether each point is inside the closed mesh, and proven so.
 
     ``face``, ``feature`` and ``distance`` are the query's answer for
-    ``points`` (``(n, 3)``).  The pseudonormal ``N`` of the closest feature
-    decides where ``|(P - V) . N|`` exceeds its bound of error:
-    ``E |P - V| + MARGIN (|P - V| + L)``, with ``E`` the bound on ``N``'s
-    direction and ``L`` the face's longest edge; the winding number decides
-    the other points at a positive distance.  Rows at distance 0 or NaN
-    are False.
+    ``points`` (``(n, 3)``); ``faces`` the faces the tables were built on.
+    The pseudonormal ``N`` of the closest feature decides where
+    ``|(P - V) . N|`` exceeds its bound of error: ``E |P - V| + MARGIN (|P -
+    V| + L)``, with ``E`` the bound on ``N``'s direction and ``L`` the face's
+    longest edge; inside is ``(P - V) . N < 0``, or ``> 0`` where ``flip``
+    (a solid whose faces point inwards).  ``winding(points, distance)``
+    decides the other points at a positive distance, returning ``(inside,
+    certain)``.  Rows at distance 0 or NaN are False in both.
     """
     out = np.zeros(len(points), dtype=bool)
+    certain = np.zeros(len(points), dtype=bool)
     rows = np.flatnonzero(distance > 0)
     if len(rows) == 0:
-        return out
+        return out, certain
     f = face[rows]
     row, anchor = feature_rows(signs, faces, f, feature[rows])
     normal = signs.table[row]
@@ -224,11 +237,12 @@ def inside(signs, vertices, faces, points, face, feature, distance):
     with np.errstate(invalid="ignore"):  # inf * 0 where the point is on the anchor: undecided
         bound = normal[:, 3] * reach + MARGIN * (reach + signs.longest[f])
         decided = np.abs(dot) > bound
-    out[rows[decided]] = dot[decided] < 0.0
+    out[rows[decided]] = (dot[decided] > 0.0) if flip else (dot[decided] < 0.0)
+    certain[rows[decided]] = True
     undecided = rows[~decided]
     if len(undecided):
-        out[undecided] = winding_numbers(vertices, faces, points[undecided]) > 0.5
-    return out
+        out[undecided], certain[undecided] = winding(points[undecided], distance[undecided])
+    return out, certain
 
 
 def winding_numbers(vertices, faces, points):
