@@ -23,7 +23,8 @@ def _points(vertices, faces, seed=0):
     rng = np.random.default_rng(seed)
     size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
     lo, hi = vertices.min(axis=0) - 0.2 * size, vertices.max(axis=0) + 0.2 * size
-    return np.concatenate([rng.uniform(lo, hi, (700, 3)), near_points(rng, vertices, faces, 300, 1e-9 * size)])
+    near = near_points(rng, vertices, faces, 300, 1e-9 * size)
+    return np.concatenate([rng.uniform(lo, hi, (700, 3)), near])
 
 
 def _truth(vertices, faces, points):
