@@ -23,7 +23,7 @@ of the mesh's size.
 import numpy as np
 
 from ._fp import two_product, two_sum
-from ._jit import inline, part
+from ._jit import inline, kernel, part
 
 #: The predicates' answer where underflow could make the exact sign wrong.
 DOUBT = 2
@@ -210,3 +210,17 @@ def orient3d_fraction(a, b, c, d):
     )
     return (det > 0) - (det < 0)
 
+
+
+@kernel()
+def _both(x):
+    return orient3d(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11]) + orient2d(
+        x[0], x[1], x[2], x[3], x[4], x[5]
+    )
+
+
+def warm():
+    """Compile (or load) the predicates on their own, before a kernel that calls them is
+    compiled: compiled first from inside a larger caller, they take several times as long
+    (Numba 0.6x)."""
+    _both(np.zeros(12))

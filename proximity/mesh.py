@@ -371,11 +371,8 @@ class TriangleMesh(Collection):
             raise keyword_only(self, "winding_number", args)
         pts = _points(points)
         out_shape = pts.shape[:-1]
-        flat = pts.reshape(-1, 3)
-        h = self._hierarchy()
-        rule = winding.INTEGRAL if h.integral else winding.NONZERO
-        w, e = winding.numbers(h, flat, full=bool(full), rule=rule)
-        inside, certain, w, e = winding.sides(w, e, h.integral)
+        w, e, integral = self._winding_numbers(pts.reshape(-1, 3), full=bool(full))
+        inside, certain, w, e = winding.sides(w, e, integral)
         return winding.WindingResult(
             winding=w.reshape(out_shape),
             error=e.reshape(out_shape),
@@ -476,16 +473,35 @@ class TriangleMesh(Collection):
     def _winding_sides(self, points, distance):
         """``(inside, certain)`` by the winding number for ``points`` ``(n, 3)`` at ``distance``
         ``(n,)``: both False where the distance is 0 or NaN."""
-        from . import winding
-
         inside = np.zeros(len(points), dtype=bool)
         certain = np.zeros(len(points), dtype=bool)
         rows = np.flatnonzero(distance > 0)
         if len(rows):
-            h = self._hierarchy()
-            w, e = winding.numbers(h, points[rows], rule=winding.INTEGRAL if h.integral else winding.NONZERO)
-            inside[rows], certain[rows], _, _ = winding.sides(w, e, h.integral)
+            w, e, integral = self._winding_numbers(points[rows])
+            from . import winding
+
+            inside[rows], certain[rows], _, _ = winding.sides(w, e, integral)
         return inside, certain
+
+    def _winding_numbers(self, points, full=False):
+        """``(w, error, integral)`` at ``points`` ``(n, 3)``: on a mesh closed by position the
+        signed crossings of a ray (exact integers), and the hierarchy's sum where a crossing is
+        undecided or ``full``; elsewhere the sum."""
+        from . import winding
+
+        h = self._hierarchy()
+        if not h.integral:
+            w, e = winding.numbers(h, points, full=full, rule=winding.NONZERO)
+            return w, e, False
+        if full:
+            w, e = winding.numbers(h, points, full=True, rule=winding.INTEGRAL)
+            return w, e, True
+        w = winding.crossings(h, points)
+        e = np.zeros(len(points))
+        rest = np.flatnonzero(np.isnan(w))
+        if len(rest):
+            w[rest], e[rest] = winding.numbers(h, points[rest], rule=winding.INTEGRAL)
+        return w, e, True
 
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""

@@ -39,14 +39,13 @@ winding number is 1 (or -1, inverted) and nowhere else.
 """
 
 import dataclasses
-import math
 
 import numpy as np
 from numba import prange
 
 from . import _threads
 from ._jit import inline, kernel, part
-from ._orient import DOUBT, orient2d, orient3d
+from ._orient import DOUBT, orient2d, orient3d, warm
 
 
 @dataclasses.dataclass(frozen=True)
@@ -390,15 +389,6 @@ def _pair(tri, ids, zero, i, j):
 BLOCK = 64
 
 
-@kernel()
-def _predicates(x):
-    """The predicates, compiled on their own: compiled first from inside the
-    pair tests, they take about eight times as long (Numba 0.6x)."""
-    return orient3d(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11]) + orient2d(
-        x[0], x[1], x[2], x[3], x[4], x[5]
-    )
-
-
 @kernel(parallel=True)
 def _intersections(tri, ids, zero, live, boxes, child, count, hit, doubt):
     """For each live row ``i``: a later row that meets it (``hit``), or whose test was
@@ -451,34 +441,6 @@ def _intersections(tri, ids, zero, live, boxes, child, count, hit, doubt):
                         doubt[i] = j
 
 
-@kernel(parallel=True)
-def _node_boxes(child, count, tri, live):
-    """Each node's box over its live rows, ``(m, 6)`` (low, high); empty (inf, -inf) where none."""
-    m = child.shape[0]
-    boxes = np.empty((m, 6))
-    first = np.empty(m, np.int64)
-    last = np.empty(m, np.int64)
-    for i in range(m - 1, -1, -1):
-        if count[i] > 0:
-            first[i] = child[i]
-            last[i] = child[i] + count[i]
-        else:
-            first[i] = first[child[i]]
-            last[i] = last[child[i] + 1]
-    for i in prange(m):
-        for a in range(3):
-            boxes[i, a] = math.inf
-            boxes[i, 3 + a] = -math.inf
-        for j in range(first[i], last[i]):
-            if not live[j]:
-                continue
-            for v in range(3):
-                for a in range(3):
-                    boxes[i, a] = min(boxes[i, a], tri[j, 3 * v + a])
-                    boxes[i, 3 + a] = max(boxes[i, 3 + a], tri[j, 3 * v + a])
-    return boxes
-
-
 # -- the check ------------------------------------------------------------------------
 
 
@@ -519,14 +481,13 @@ def check(mesh, hierarchy):
     # Self-intersections, down the hierarchy.
     h = hierarchy
     ids = faces[h.index]
-    live_rows = (h.weight > 0) & live[h.index]
+    live_rows = h.weight > 0  # a face with a repeated vertex has zero area
     zero = _zero_neighbours(h, twin, live, len(faces))
     with _threads.kernel():
-        boxes = _node_boxes(h.child, h.count, h.triangles, live_rows)
         hit = np.empty(len(ids), np.int64)
         doubt = np.empty(len(ids), np.int64)
-        _predicates(np.zeros(12))
-        _intersections(h.triangles, ids, zero, live_rows, boxes, h.child, h.count, hit, doubt)
+        warm()
+        _intersections(h.triangles, ids, zero, live_rows, h.boxes, h.child, h.count, hit, doubt)
     rows = np.flatnonzero(hit >= 0)
     if len(rows):
         i, j = sorted((int(h.index[rows[0]]), int(h.index[hit[rows[0]]])))

@@ -209,8 +209,7 @@ def test_pairs_of_faces_meet_exactly_where_they_do(second, meets):
         ids = validity.merged_faces(vertices, faces[order])
         h = TriangleMesh(vertices, faces[order])._hierarchy()
         live = np.ones(2, dtype=bool)
-        boxes = validity._node_boxes(h.child, h.count, h.triangles, live)
         hit, doubt = np.empty(2, np.int64), np.empty(2, np.int64)
         zero = np.full((2, 3), -1, np.int64)
-        validity._intersections(h.triangles, ids[h.index], zero, live, boxes, h.child, h.count, hit, doubt)
+        validity._intersections(h.triangles, ids[h.index], zero, live, h.boxes, h.child, h.count, hit, doubt)
         assert (doubt < 0).all() and (hit[0] == 1) == meets
