@@ -64,7 +64,8 @@ def test_degenerate_grids_and_bad_arguments():
     one = mesh.sdf_grid([1.0, 0.0, 0.0], [1.0, 0.0, 0.0], (1, 1, 1))
     assert one.shape == (1, 1, 1) and one[0, 0, 0] == mesh.signed_distance([1.0, 0.0, 0.0])
     line = mesh.sdf_grid([0, 0, 0], [2, 0, 0], (5, 1, 1))
-    np.testing.assert_array_equal(line[:, 0, 0], mesh.signed_distance(_grid_points([0, 0, 0], [2, 0, 0], (5, 1, 1))))
+    expected = mesh.signed_distance(_grid_points([0, 0, 0], [2, 0, 0], (5, 1, 1)))
+    np.testing.assert_array_equal(line[:, 0, 0], expected)
     with pytest.raises(ValueError, match="shape must be 3 integers"):
         mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 0, 2))
     with pytest.raises(ValueError, match="lower must not exceed upper"):
