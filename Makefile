@@ -68,12 +68,14 @@ bench: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes
+	$(BIN)/python -m benchmarks.signs
 	$(BIN)/python -m benchmarks.scale
 
 bench-quick: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes --quick
+	$(BIN)/python -m benchmarks.signs --quick
 	$(BIN)/python -m benchmarks.scale --quick
 
 # The API reference, from the docstrings, into docs/_build/html; a warning
