@@ -319,20 +319,6 @@ def markdown(raw, path="docs/performance.md"):
     return "\n".join(lines)
 
 
-def write_section(path, text, marker="sign-bench"):
-    """Replace the text between ``<!-- marker -->`` and ``<!-- /marker -->`` in ``path``
-    (appended where absent)."""
-    page = Path(path)
-    body = page.read_text(encoding="utf-8") if page.exists() else ""
-    start, end = f"<!-- {marker} -->", f"<!-- /{marker} -->"
-    block = f"{start}\n{text}\n{end}"
-    if start in body and end in body:
-        body = body[: body.index(start)] + block + body[body.index(end) + len(end):]
-    else:
-        body = body.rstrip("\n") + "\n\n" + block + "\n"
-    page.write_text(body, encoding="utf-8")
-
-
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["--child"]:
@@ -348,7 +334,9 @@ def main(argv=None):
     text = markdown(raw, args.write or "docs/performance.md")
     print(text)
     if args.write:
-        write_section(args.write, text)
+        from benchmarks.meshes import write_section
+
+        write_section(args.write, text, marker="sign-bench")
     return 0
 
 

@@ -15,14 +15,9 @@ Two tests, used together:
   the feature gives the same product, as ``C - V`` runs along the feature
   and ``N`` is normal to it, and ``P - V`` is computed more accurately than
   ``P - C``.
-* The **generalized winding number** (A. Jacobson, L. Kavan and O.
-  Sorkine-Hornung, *Robust inside-outside segmentation using generalized
-  winding numbers*, ACM TOG 32(4), 2013): the sum of the solid angles of
-  the faces seen from ``P`` (A. van Oosterom and J. Strackee's formula),
-  over ``4 pi``; 1 inside a closed surface, 0 outside, and a smooth
-  measure in between on surfaces with holes.  It costs O(F) per point here
-  (every face; a hierarchy with far-field approximations, as in Barill et
-  al.'s fast winding numbers, is not built).
+* The **winding number** (:mod:`proximity.winding`): exact signed ray
+  crossings on a closed mesh, and a hierarchy of far-field series with a
+  rigorous bound on any mesh; inside means nonzero (``|w| > 1/2``).
 
 The pseudonormal decides every point whose product clears its margin of
 rounding errors (see :func:`inside`); the winding number decides the rest:
@@ -31,7 +26,10 @@ whose closest feature touches a degenerate face (zero area), whose normal
 is undefined and whose neighbours' normals do not describe the surface
 there.  Faces whose vertex indices repeat (a collapsed face) are left out
 of the surface's topology and normals altogether: the faces around them
-close the surface without them.
+close the surface without them.  The tables are built on the mesh's faces
+with coincident vertices merged (:func:`proximity.validity.merged_faces`),
+and are used only where :mod:`proximity.validity` finds that the mesh
+bounds a solid (flipped where its faces point inwards).
 """
 
 import numba
@@ -246,7 +244,9 @@ def inside(signs, vertices, faces, points, face, feature, distance, *, flip, win
 
 
 def winding_numbers(vertices, faces, points):
-    """The generalized winding number of the mesh at each point, ``(n,)``: every face's solid angle."""
+    """The generalized winding number of the mesh at each point, ``(n,)``: every face's solid
+    angle, summed in floats without a bound (a reference for tests; the queries use
+    :mod:`proximity.winding`)."""
     from ._jit import kernel
 
     global _winding_kernel

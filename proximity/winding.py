@@ -1,5 +1,9 @@
 """The generalized winding number of a mesh, over its hierarchy, with a bound on its error.
 
+Two algorithms share one hierarchy: far-field series with a rigorous bound
+(:func:`numbers`, any mesh), and exact signed ray crossings (:func:`crossings`,
+meshes closed by position).
+
 The winding number of a triangle mesh at a point ``P`` is the sum of the
 faces' solid angles seen from ``P`` over ``4 pi`` (A. Jacobson, L. Kavan and
 O. Sorkine-Hornung, *Robust inside-outside segmentation using generalized
@@ -35,13 +39,16 @@ Summing the dropped terms ``l >= 4`` for every face, with ``rho <= R`` (the
 node's radius about ``c``) and ``X = R / d < 1``, the solid angle is off by at
 most
 
-    R M2 / d^5  (4.5 / (1 - X) + X / (1 - X)^2)
+    K / d^5  (4.5 / (1 - X) + X / (1 - X)^2)
 
-where ``M2 = sum of the integrals of rho^2 over the faces``; a node whose
-ball holds ``P`` (``X >= 1``) has no expansion.  To this, each node adds a
-bound of the rounding of its moments and of the series' evaluation,
-``2^-40 A / d^2`` (``A`` its area: ``|N| <= A``, and the other terms are at
-most a few times ``A / d^2``).
+where ``K`` bounds the integral of ``rho^3`` over the node's faces: the
+lesser of ``R M2`` (``M2`` the integral of ``rho^2``, exact for triangles)
+and the sum of each face's area times its farthest vertex's ``rho^3``.  A
+node whose ball holds ``P`` (``X >= 1``) has no expansion.  To this, each
+node adds a bound of the rounding of its moments (kept in float32, each
+within ``2^-24`` of itself) and of the series' evaluation, ``2^-14 A / d^2``
+(``A`` its area: ``|N| <= A``, and the other terms add up to at most a few
+hundred times ``A / d^2``).
 
 Near field
 ----------
@@ -54,7 +61,10 @@ reach the branch cut of ``atan2`` (``den < 0``, ``det`` within its bound of
 0: ``P`` is within rounding of the face's interior) or the origin, the face's
 term may be off by a whole turn, and the bound says so.  Faces of zero area
 (collinear vertices, decided exactly) contribute exactly 0 and are left out.
-A point that coincides with a vertex of a face gets 0 from that face.
+A point that coincides with a vertex of a face is on the surface: that
+face's term is 0 with a whole turn of doubt (except under the
+:data:`FRACTIONAL` rule, which :mod:`proximity.validity` asks for at
+vertices, with the faces there left out).
 
 The sum
 -------
@@ -62,8 +72,9 @@ Each point starts from the root and repeatedly opens the node with the
 largest error bound (a max-heap over the frontier): an inner node is
 replaced by its children's expansions, a leaf by its faces' exact terms.
 It stops as soon as the sum of the bounds (plus the rounding of the running
-sums) is below the distance of the sum from the decision, ``||w| - 1/2|``,
-so that the sign it reports is proven; or when every face is exact.  The
+sums) decides the point's ``rule``: the distance of the sum from the
+decision, ``||w| - 1/2|``; on a closed mesh an interval that excludes 0 or
+holds no integer but 0; or when every face is exact.  The
 reported bound is rigorous: the winding number is within ``error`` of
 ``winding``, and where ``error < ||winding| - 1/2|`` the side is certain.
 
@@ -89,11 +100,11 @@ from .results import _frozen, format_repr
 U = 2.0**-53
 FOUR_PI = 4.0 * math.pi
 TWO_PI = 2.0 * math.pi
-#: Columns of a node's record: centre (3), radius, ``R M2``, area, ``N`` (3),
+#: Columns of a node's record: centre (3), radius, ``K``, area, ``N`` (3),
 #: ``tr M``, the symmetric part of ``M`` as a quadratic form (``xx yy zz xy xz
 #: yz``), ``u = 2 t1 + t2`` (3), and ``T``'s symmetric part as a cubic form
 #: (``xxx yyy zzz xxy xxz yyx yyz zzx zzy xyz``).
-C_CENTRE, C_RADIUS, C_RM2, C_AREA, C_N, C_TRACE, C_Q, C_U, C_C = 0, 3, 4, 5, 6, 9, 10, 16, 19
+C_CENTRE, C_RADIUS, C_CUBES, C_AREA, C_N, C_TRACE, C_Q, C_U, C_C = 0, 3, 4, 5, 6, 9, 10, 16, 19
 COLUMNS = 29
 #: A node smaller than this (in the scaled frame) has no expansion.
 SMALLEST = 2.0**-160
@@ -236,9 +247,9 @@ def build(mesh):
         nodes = _moments(child, count, triangles, weight)
         boxes = _boxes(child, count, triangles, weight)
     # Kept in float32, which halves what a query reads: the bounds (radius,
-    # R M2, area) rounded up, the moments within 2^-24 of themselves
+    # K, area) rounded up, the moments within 2^-24 of themselves
     # (covered by SERIES_ROUNDING).
-    nodes[:, [C_RADIUS, C_RM2, C_AREA]] *= 1.0 + 2.0**-22
+    nodes[:, [C_RADIUS, C_CUBES, C_AREA]] *= 1.0 + 2.0**-22
     nodes = nodes.astype(np.float32)
     for array in (nodes, triangles, weight, boxes):
         array.flags.writeable = False
@@ -273,7 +284,7 @@ def _face_moments(tri, j, wt, cx, cy, cz, out):
     s02 = (ax * az + bx * bz + qx * qz + sx * sz) / 12.0
     s12 = (ay * az + by * bz + qy * qz + sy * sz) / 12.0
     trace_s = s00 + s11 + s22
-    out[C_RM2] += area * trace_s  # M2 for now; times R at the end
+    out[C_CUBES] += area * trace_s  # M2 for now; K at the end
     out[C_AREA] += area
     out[C_N] += nx
     out[C_N + 1] += ny
@@ -365,7 +376,7 @@ def _moments(child, count, tri, weight):
         # Rounded up past the rounding of the squares and the root.
         radius = math.sqrt(radius) * (1.0 + 8.0 * U)
         out[C_RADIUS] = radius if radius >= SMALLEST else math.inf
-        out[C_RM2] = min(out[C_RM2] * radius, cubes * (1.0 + 16.0 * U))
+        out[C_CUBES] = min(out[C_CUBES] * radius, cubes * (1.0 + 16.0 * U))
     return nodes
 
 
@@ -434,7 +445,7 @@ def _expansion(nodes, k, px, py, pz):
     value = dipole * inv3 - (3.0 * quadratic + 1.5 * linear) * inv5 + 7.5 * cubic * inv5 * inv2
     x = radius * inv * (1.0 + 4.0 * U)
     over = 1.0 / (1.0 - x)
-    tail = nodes[k, C_RM2] * inv5 * over * (4.5 + x * over)
+    tail = nodes[k, C_CUBES] * inv5 * over * (4.5 + x * over)
     error = (tail + SERIES_ROUNDING * nodes[k, C_AREA] * inv2) * (1.0 + 32.0 * U) / FOUR_PI + 1e-300
     return value / FOUR_PI, error
 
