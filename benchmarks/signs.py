@@ -10,7 +10,7 @@ points (``--quick``: 2,000): half uniform in 1.2 times its bounding box, 30%
 on its surface moved along the face normal by a normal deviate of 1e-3 of its
 size, and 20% around its edges (those of zero-area faces included), 1e-8 to
 3e-8 of its size off them.  The truth is the exact integer winding number (signed ray crossings
-in rational arithmetic, :func:`proximity.testing.exact.winding_numbers`),
+in rational arithmetic, :func:`proximity.testing.winding.winding_numbers`),
 inside where it is not 0; on the open sphere, the winding number summed
 face by face with its rigorous bound, on the points where the bound decides
 ``|w| > 1/2``.  Points nearer the surface than ``SIGN_BAND`` of the size
@@ -199,14 +199,14 @@ def _nonzero_area(vertices, faces):
 def _truth(name, vertices, faces, points):
     """``(inside, judged)`` per point."""
     from proximity import TriangleMesh
-    from proximity.testing import exact
+    from proximity.testing import winding as exact_winding
 
     mesh = TriangleMesh(vertices, faces)
     size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
     judged = np.asarray(mesh.distance(points)) > SIGN_BAND * size
     if mesh._hierarchy().integral:
         inside = np.zeros(len(points), dtype=bool)
-        inside[judged] = exact.winding_numbers(vertices, faces, points[judged]) != 0
+        inside[judged] = exact_winding.winding_numbers(vertices, faces, points[judged]) != 0
         return inside, judged
     r = mesh.winding_number(points, full=True)
     return np.asarray(r.inside), judged & np.asarray(r.certain)

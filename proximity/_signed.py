@@ -27,7 +27,7 @@ is undefined and whose neighbours' normals do not describe the surface
 there.  Faces whose vertex indices repeat (a collapsed face) are left out
 of the surface's topology and normals altogether: the faces around them
 close the surface without them.  The tables are built on the mesh's faces
-with coincident vertices merged (:func:`proximity.validity.merged_faces`),
+with coincident vertices merged (:func:`proximity._topology.merged_faces`),
 and are used only where :mod:`proximity.validity` finds that the mesh
 bounds a solid (flipped where its faces point inwards).
 """

@@ -571,7 +571,7 @@ class TriangleMesh(Collection):
         """``(w, error, integral)`` at ``points`` ``(n, 3)``: on a mesh closed by position the
         signed crossings of a ray (exact integers), and the hierarchy's sum where a crossing is
         undecided or ``full``; elsewhere the sum."""
-        from . import winding
+        from . import crossings, winding
 
         h = self._hierarchy()
         if not h.integral:
@@ -580,7 +580,7 @@ class TriangleMesh(Collection):
         if full:
             w, e = winding.numbers(h, points, full=True, rule=winding.INTEGRAL)
             return w, e, True
-        w = winding.crossings(h, points)
+        w = crossings.crossings(h, points)
         e = np.zeros(len(points))
         rest = np.flatnonzero(np.isnan(w))
         if len(rest):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from proximity import TriangleMesh, validity
-from proximity.testing import exact
+from proximity.testing import winding as exact_winding
 from proximity.testing.meshes import box, defective, icosphere, near_points
 
 DEFECTIVE = defective()
@@ -28,7 +28,7 @@ def _points(vertices, faces, seed=0):
 
 
 def _truth(vertices, faces, points):
-    return exact.winding_numbers(vertices, faces, points) != 0
+    return exact_winding.winding_numbers(vertices, faces, points) != 0
 
 
 @pytest.mark.parametrize("name", CLOSED)

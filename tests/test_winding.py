@@ -1,7 +1,7 @@
 """The hierarchical winding number: its bound holds, and every side it proves is exact.
 
 The truth is the exact integer winding number of closed meshes (signed ray
-crossings in rational arithmetic, :func:`proximity.testing.exact.winding_numbers`),
+crossings in rational arithmetic, :func:`proximity.testing.winding.winding_numbers`),
 and, on open meshes, the sum over every face with its own rounding bound.
 """
 
@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from proximity import TriangleMesh, winding
-from proximity.testing import exact
+from proximity import TriangleMesh, crossings, winding
+from proximity.testing import winding as exact_winding
 from proximity.testing.meshes import box, box_points, defective, icosphere, near_points, torus
 
 
@@ -59,7 +59,7 @@ def test_closed_meshes_get_their_exact_integer_winding_number(name):
     mesh = TriangleMesh(vertices, faces)
     points = np.concatenate([_random_points(vertices, 600, 1), near_points(np.random.default_rng(2), vertices,
                                                                            faces, 200, 1e-6)])  # fmt: skip
-    truth = exact.winding_numbers(vertices, faces, points)
+    truth = exact_winding.winding_numbers(vertices, faces, points)
     r = mesh.winding_number(points)
     assert r.certain.all()
     assert (r.inside == (truth != 0)).all()
@@ -100,7 +100,7 @@ def test_zero_area_faces_on_a_closed_box_keep_points_near_them_exact():
     angle = rng.uniform(0, 2 * np.pi, 400)
     points = np.stack([-1 + height * np.cos(angle), -1 + height * np.sin(angle), z], axis=1)
     points = np.concatenate([points, [[-1.000000001914884, -1.0000000005772514, -0.23781466995926992]]])
-    truth = exact.winding_numbers(vertices, faces, points)
+    truth = exact_winding.winding_numbers(vertices, faces, points)
     r = mesh.winding_number(points)
     assert r.certain.all() and (r.inside == (truth != 0)).all() and 0 < truth.sum() < len(points)
 
@@ -133,7 +133,7 @@ def test_points_on_the_surface_are_never_certain():
     near = np.concatenate([tri[:100].mean(axis=1), (tri[:100, 0] + tri[:100, 1]) / 2])
     r = mesh.winding_number(near)
     assert 0 < r.certain.mean() < 1
-    truth = exact.winding_numbers(vertices, faces, near[r.certain])
+    truth = exact_winding.winding_numbers(vertices, faces, near[r.certain])
     assert (r.inside[r.certain] == (truth != 0)).all()
 
 
@@ -197,8 +197,8 @@ def test_crossings_are_exact_for_rays_through_edges_and_vertices(name):
     mesh = TriangleMesh(vertices, faces)
     h = mesh._hierarchy()
     grid = np.stack(np.meshgrid(*[np.arange(-1.25, 2.01, 0.25)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
-    w = winding.crossings(h, grid)
+    w = crossings.crossings(h, grid)
     decided = ~np.isnan(w)
-    truth = exact.winding_numbers(vertices, faces, grid[decided])
+    truth = exact_winding.winding_numbers(vertices, faces, grid[decided])
     assert (w[decided] == truth).all()
     assert (mesh.distance(grid[~decided]) < 1e-15).all() and decided.mean() > 0.7
