@@ -122,6 +122,35 @@ def _trimesh(vertices, faces, points):
     return -trimesh.proximity.signed_distance(trimesh.Trimesh(vertices, faces, process=False), points)
 
 
+def _meshlib_grid(mode):
+    def grid(vertices, faces, lower, upper, shape, band):
+        from meshlib import mrmeshnumpy, mrmeshpy
+
+        mesh = mrmeshnumpy.meshFromFacesVerts(faces.astype(np.int32), vertices.astype(np.float32))
+        params = mrmeshpy.MeshToDistanceVolumeParams()
+        step = (np.asarray(upper) - np.asarray(lower)) / (np.asarray(shape) - 1)
+        # MeshLib samples voxel centres: the origin half a step below the first point.
+        params.vol.origin = mrmeshpy.Vector3f(*map(float, np.asarray(lower) - step / 2))
+        params.vol.voxelSize = mrmeshpy.Vector3f(*map(float, step))
+        params.vol.dimensions = mrmeshpy.Vector3i(*map(int, shape))
+        params.dist.signMode = getattr(mrmeshpy.SignDetectionMode, mode)
+        if band is not None:
+            params.dist.maxDistSq = float(band) ** 2
+        volume = mrmeshpy.meshToDistanceVolume(mrmeshpy.MeshPart(mesh), params)
+        return mrmeshnumpy.getNumpy3Darray(volume.vol if hasattr(volume, "vol") else volume)
+
+    return "meshlib", grid
+
+
+#: Grids: ``name: (label, module, function(vertices, faces, lower, upper, shape, band) -> grid)``.
+GRID_PEERS = {
+    "meshlib-grid-normal": (
+        "MeshLib meshToDistanceVolume, ProjectionNormal", *_meshlib_grid("ProjectionNormal")
+    ),
+    "meshlib-grid-winding": ("MeshLib meshToDistanceVolume, WindingRule", *_meshlib_grid("WindingRule")),
+}
+
+
 #: ``name: (label, module, function(vertices, faces, points) -> signed distances, negative inside)``.
 PEERS = {
     "libigl-pseudonormal": ("libigl signed_distance, pseudonormal", *_libigl("pseudonormal")),
@@ -143,6 +172,25 @@ def _timed(call, repeats=3):
         answer = call()
         times.append(time.perf_counter() - start)
     return float(np.median(times)), answer
+
+
+def grid_child(name, data_path):
+    """Time grid peer ``name`` on the grid of ``data_path``, dense and banded; its record."""
+    label, module, function = GRID_PEERS[name]
+    try:
+        __import__(module)
+    except Exception as exc:  # an ImportError, or a library that fails as it loads
+        return {"skipped": f"{module} does not import: {type(exc).__name__}: {exc}"}
+    data = np.load(data_path)
+    shape = tuple(int(n) for n in data["shape"])
+    args = (data["vertices"], data["faces"], data["lower"], data["upper"], shape)
+    record = {}
+    for key, band in (("dense", None), ("band", float(data["band"]))):
+        try:
+            record[key] = {"seconds": _timed(lambda b=band: function(*args, b))[0]}
+        except Exception as exc:  # noqa: BLE001  (a peer's failure is a result)
+            record[key] = {"error": f"{type(exc).__name__}: {str(exc)[:200]}"}
+    return record
 
 
 def child(name, data_path, out_path):
@@ -267,8 +315,46 @@ def run(quick=False, seed=0, out=Path("bench-results"), log=print):
         answers_path.unlink()
         log(f"{peer}: " + ", ".join(f"{name} {_brief(entry)}" for name, entry in record.items()))
     data_path.unlink()
+    raw["grid"] = run_grid(quick, work, log)
     (work / "signs.json").write_text(json.dumps(raw, indent=1), encoding="utf-8")
     return raw
+
+
+def run_grid(quick, work, log=print):
+    """``sdf_grid`` against the grid peers: a torus of 20,000 faces, dense and with a band of 2 steps."""
+    from proximity import TriangleMesh
+
+    vertices, faces = torus(100, 100)
+    shape = (48, 48, 16) if quick else (128, 128, 40)
+    lower, upper = np.array([-1.45, -1.45, -0.45]), np.array([1.45, 1.45, 0.45])
+    band = 2.0 * float(np.max((upper - lower) / (np.array(shape) - 1)))
+    record = {"faces": len(faces), "shape": list(shape), "band": band, "modes": {}}
+    mesh = TriangleMesh(vertices, faces)
+    mesh.sdf_grid(lower, upper, (4, 4, 4), sign="winding")  # the tables, timed apart
+    for sign in ("auto", "winding"):
+        for key, b in (("dense", None), ("band", band)):
+            seconds, _ = _timed(
+                lambda s=sign, b=b: mesh.sdf_grid(lower, upper, shape, max_distance=b, sign=s)
+            )
+            record["modes"].setdefault(f"proximity sdf_grid, sign={sign!r}", {})[key] = {"seconds": seconds}
+    data_path = work / "grid-data.npz"
+    np.savez(data_path, vertices=vertices, faces=faces, lower=lower, upper=upper, shape=shape, band=band)
+    for peer in GRID_PEERS:
+        args = [sys.executable, "-m", "benchmarks.signs", "--grid-child", peer, str(data_path)]
+        done = subprocess.run(args, capture_output=True, text=True, timeout=1800)
+        try:
+            result = json.loads(done.stdout.strip().splitlines()[-1])
+        except (IndexError, json.JSONDecodeError):
+            result = {"skipped": f"the child failed: {done.stderr.strip()[-300:]}"}
+        if "skipped" in result:
+            record.setdefault("skipped", {})[peer] = result["skipped"]
+        else:
+            record["modes"][GRID_PEERS[peer][0]] = result
+    data_path.unlink()
+    for mode, entry in record["modes"].items():
+        cells = ", ".join(f"{k} {1e3 * v.get('seconds', np.nan):.0f} ms" for k, v in entry.items())
+        log(f"grid, {mode}: {cells}")
+    return record
 
 
 def _brief(entry):
@@ -316,6 +402,22 @@ def markdown(raw, path="docs/performance.md"):
     if raw.get("skipped"):
         skipped = "; ".join(f"{k} ({v[:80]})" for k, v in raw["skipped"].items())
         lines += ["", f"Not installed here: {skipped}"]
+    grid = raw.get("grid")
+    if grid:
+        nx, ny, nz = grid["shape"]
+        lines += [
+            "",
+            f"Signed distance grids: a torus of {grid['faces']:,} faces on a {nx} x {ny} x {nz} grid over "
+            f"its box, every point (*dense*) and with a band of {grid['band']:.3g} (two steps), in ms, "
+            "median of 3.",
+            "",
+            "| grid | dense | band |",
+            "|---|---:|---:|",
+        ]
+        for mode, entry in grid["modes"].items():
+            cells = [f"{1e3 * entry[k]['seconds']:.0f}" if "seconds" in entry.get(k, {}) else "error"
+                     for k in ("dense", "band")]  # fmt: skip
+            lines.append(f"| {mode} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -323,6 +425,9 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["--child"]:
         print(json.dumps(child(*argv[1:4])))
+        return 0
+    if argv[:1] == ["--grid-child"]:
+        print(json.dumps(grid_child(*argv[1:3])))
         return 0
     parser = argparse.ArgumentParser(prog="python -m benchmarks.signs", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")

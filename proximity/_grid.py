@@ -12,6 +12,9 @@ distance to the surface is at least ``d(c) - r``.  A block is
   points: their unsigned distances are queried, with the side of ``c``;
 * otherwise each point gets :meth:`~proximity.TriangleMesh.signed_distance`.
 
+With a band, the points left are grouped again in blocks of 2 points a side,
+and those beyond the band are skipped the same way.
+
 A block's side is used only where it is certain and the sign is exact (the
 winding number, or the pseudonormal on a solid); else its points get their
 own sides.  Points are queried one slab of blocks (along x) at a time.
@@ -23,8 +26,9 @@ import numpy as np
 BLOCK = 8
 EPS = 2.0**-52
 
-# Categories of blocks.
-_OWN, _CLEAR, _FAR, _FAR_OWN = 0, 1, 2, 3
+# Categories of blocks (and points): each its own signed distance; their block's side
+# and unsigned distances; ±inf by their block's side; each its own side, ±inf; filled.
+_OWN, _CLEAR, _FAR, _FAR_OWN, _DONE = 0, 1, 2, 3, 4
 
 
 def _blocks(axis, n):
@@ -73,19 +77,23 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
     for bx in range(n_blocks[0]):
         xs = slice(blocks[0][0][bx], blocks[0][1][bx])
         width = xs.stop - xs.start
-        cat = _spread(category[bx], width, shape)
-        sides = _spread(block_sign[bx], width, shape)
+        cat = np.array(_spread(category[bx], width, shape))
+        sides = _spread(block_sign[bx], width, shape).reshape(-1)
         slab = out[xs]
         far = cat == _FAR
-        slab[far] = np.inf * sides[far]
+        slab[far] = np.inf * sides.reshape(cat.shape)[far]
+        flat = slab.reshape(-1)
+        local = [axes[0][xs], axes[1], axes[2]]
+        if band is not None:
+            # Blocks of 2 points a side within those that touch the band: far ones skipped too.
+            _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side)
         for kind in (_CLEAR, _OWN, _FAR_OWN):
-            index = np.flatnonzero(cat == kind)
+            index = np.flatnonzero(cat.reshape(-1) == kind)
             if len(index) == 0:
                 continue
-            i, j, k = np.unravel_index(index, cat.shape)
-            points = np.stack([axes[0][xs][i], axes[1][j], axes[2][k]], axis=-1)
+            points = _points(local, np.unravel_index(index, cat.shape))
             if kind == _CLEAR:
-                value = np.asarray(mesh.distance(points, method=method)) * sides.reshape(-1)[index]
+                value = np.asarray(mesh.distance(points, method=method)) * sides[index]
             elif kind == _OWN:
                 _, distance, inside, _ = mesh._signed(points, method, sign)
                 value = np.where(inside, -distance, distance)
@@ -95,8 +103,57 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
             value = value + 0.0  # -0.0 + 0.0 is +0.0
             if band is not None:
                 value = np.where(np.abs(value) > band, np.copysign(np.inf, value), value)
-            slab.reshape(-1)[index] = value
+            flat[index] = value
     return out
+
+
+def _points(local, ijk):
+    i, j, k = ijk
+    return np.stack([local[0][i], local[1][j], local[2][k]], axis=-1)
+
+
+def _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side):
+    """Within a slab, blocks of 2 points a side of the points still to query (categories
+    ``_CLEAR`` and ``_OWN``): those beyond the band get ``±inf`` (their own centre's side
+    where their block has none) and leave their category, ``cat``, for ``_DONE``."""
+    todo = np.flatnonzero((cat.reshape(-1) == _CLEAR) | (cat.reshape(-1) == _OWN))
+    if len(todo) == 0:
+        return
+    i, j, k = np.unravel_index(todo, cat.shape)
+    n1, n2 = (cat.shape[1] + 1) // 2, (cat.shape[2] + 1) // 2
+    keys, group = np.unique(((i // 2) * n1 + j // 2) * n2 + k // 2, return_inverse=True)
+    group = group.reshape(-1)
+    sub = ((keys // n2) // n1, (keys // n2) % n1, keys % n2)
+    centre, half = [], []
+    for a in range(3):
+        first = 2 * sub[a]
+        last = np.minimum(first + 1, len(local[a]) - 1)
+        lo, hi = local[a][first], local[a][last]
+        c = lo * 0.5 + hi * 0.5
+        centre.append(c)
+        half.append(np.maximum(np.abs(hi - c), np.abs(c - lo)) * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(c))
+    centre = np.stack(centre, axis=-1)
+    radius = np.sqrt(sum(h * h for h in half)) * (1.0 + 4.0 * EPS)
+    d = np.asarray(mesh.distance(centre, method=method))
+    far = d - radius > band
+    if not far.any():
+        return
+    # The side of each far block: its points' block's where that is known (a clear
+    # block's), else its own centre's where the sign is exact and certain.
+    kind = cat.reshape(-1)[todo]
+    side = np.zeros(len(keys))
+    clear_side = kind == _CLEAR
+    side[group[clear_side]] = sides[todo[clear_side]]
+    ask = np.flatnonzero(far & (side == 0.0))
+    if exact_side and len(ask):
+        _, _, inside, certain = mesh._signed(centre[ask], method, sign)
+        side[ask[certain]] = np.where(inside[certain], -1.0, 1.0)
+    done = far[group] & (side[group] != 0.0)
+    flat[todo[done]] = np.inf * side[group[done]]
+    cat.reshape(-1)[todo[done]] = _DONE
+    # Far blocks without a known side: each point its own side, no distance.
+    alone = far[group] & (side[group] == 0.0)
+    cat.reshape(-1)[todo[alone]] = _FAR_OWN
 
 
 def _spread(per_block, width, shape):
