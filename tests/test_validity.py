@@ -117,6 +117,10 @@ def test_trimesh_unmerged_vertices_are_accepted():
     truth = np.linalg.norm(points, axis=1) < 0.95
     sure = np.abs(np.linalg.norm(points, axis=1) - 0.975) > 0.03
     assert ((mesh.signed_distance(points) < 0) == truth)[sure].all()
+    pytest.importorskip("rtree")
+    from proximity import trimesh_compat
+
+    assert ((trimesh_compat.signed_distance(tm, points) > 0) == truth)[sure].all()
 
 
 @pytest.mark.parametrize("sign", ["auto", "pseudonormal", "winding"])
