@@ -87,12 +87,15 @@ def _broad_phase():
 
 
 def _winding():
-    """The winding number of the signed distance, for a mesh's read-only arrays."""
-    from . import _signed
+    """The signs of the signed distance: the winding number's hierarchy, series and ray
+    crossings, and the validity check (its predicates and pair tests)."""
     from .mesh import TriangleMesh
 
-    mesh = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
-    _signed.winding_numbers(mesh.vertices, mesh.faces, np.zeros((1, 3)))
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    tetrahedron = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], faces)
+    tetrahedron.signed_distance(np.zeros((1, 3)) + 0.1)
+    tetrahedron.signed_distance(np.zeros((1, 3)) + 0.1, sign="winding")
+    TriangleMesh(tetrahedron.vertices, faces[1:]).winding_number(np.zeros((1, 3)) + 0.1)
 
 
 def _round_frames():
@@ -122,7 +125,7 @@ def compile_all(methods=None, log=sys.stdout):
     names = list(_methods.REGISTRY) if methods is None else list(methods)
     jobs = [job for name in names for job in _jobs(name)]
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
-    jobs.append(("mesh: winding number of the signed distance", _winding))
+    jobs.append(("mesh: the signs of the signed distance", _winding))
     jobs.append(("circles and disks: unit normals of large batches", _round_frames))
     done = {}
     for k, (description, job) in enumerate(jobs, 1):

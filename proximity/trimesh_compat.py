@@ -263,9 +263,13 @@ def signed_distance(mesh, points):
     projects into that face, and from ray tests otherwise, and gives every
     point within ``trimesh.tol.merge`` (1e-8, absolute) of the surface a
     positive distance whichever its side; this function gives every point
-    its side (from the angle-weighted pseudonormal of the closest feature),
-    down to rounding error.  Where trimesh answers an open mesh with ray
-    tests, this function raises; use
+    its side (``sign="auto"``: the angle-weighted pseudonormal of the
+    closest feature on a mesh that bounds a solid, the exact winding number
+    on other closed meshes, with a warning), down to rounding error.  A
+    mesh whose vertices are split along seams (as textured files load, or
+    after ``mesh.unmerge_vertices()``) is closed by position and accepted.
+    Where trimesh answers an open mesh with ray tests, this function
+    raises; use
     ``proximity.TriangleMesh(...).signed_distance(points, sign="winding")``
     (negative inside) for open meshes.
 
