@@ -220,7 +220,8 @@ def distance(shape, points, *args, method=DEFAULT_METHOD):
 def release_memory():
     """Give back to the system the memory kept for the outputs of later batches.
 
-    The outputs of a large batch (from 1 MB) are recycled: when every array of
+    The outputs of a large batch (from 1 MB), and the arrays of a refitted
+    mesh (:meth:`TriangleMesh.with_vertices`), are recycled: when every array of
     a dropped result is gone, its memory is kept, up to 256 MB in all, for the
     next batch of the same size, which then skips the operating system's
     slow first writes to fresh pages.  Memory is never reused while an array

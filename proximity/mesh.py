@@ -604,14 +604,18 @@ class TriangleMesh(Collection):
         refitted, not rebuilt.
 
         The tree keeps its structure and its node bounds are fitted again to
-        the moved faces, in about a fifth of a build's time or less; the
-        answers are those of a mesh built afresh on the new vertices, bit for
-        bit (the search's pruning holds for any tree, and ties go to the
-        lowest face either way).  What a refit loses is speed: a tree built
-        for one shape prunes less for a much deformed one, whose faces have
-        moved far within it.  Rebuild (``TriangleMesh(vertices, faces)``) when
-        the deformation is large against the faces' size, or every so many
-        frames (``docs/performance.md`` measures the loss).
+        the moved faces, in O(faces): the leaves' bounds measured, the nodes'
+        above merged from their children's.  The answers are those of a mesh
+        built afresh on the new vertices, bit for bit (the search's pruning
+        holds for any tree, and ties go to the lowest face either way).  What
+        a refit loses is speed: a tree built for one shape prunes less for a
+        much deformed one, whose faces have moved far within it.  Rebuild
+        (``TriangleMesh(vertices, faces)``) when the deformation is large
+        against the faces' size, or every so many frames:
+        ``docs/performance.md`` measures both the refit against a build and
+        the queries after a small and a large deformation.  A refit per
+        frame reuses the memory of the meshes it replaced, once they are
+        gone (see :func:`proximity.release_memory`).
 
         Parameters
         ----------
@@ -640,8 +644,12 @@ class TriangleMesh(Collection):
         # The moved faces' rows in leaf order and their bounds; the nodes refitted.
         with _threads.kernel():
             broadphase = _lazy.load("proximity.broadphase")
-            params = broadphase.face_params(v, self.faces, tree.index)
-            moved = broadphase.assemble(tree.kinds, params, tree.index, tree.child, tree.count, tree.depth)
+            params, cull, bounds = broadphase.refit_faces(
+                v, self.faces, tree.index, tree.child, tree.count, tree.kinds
+            )
+            moved = broadphase.assemble(
+                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds
+            )
         mesh = object.__new__(TriangleMesh)
         mesh._init(
             vertices=v,

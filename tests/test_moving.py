@@ -9,7 +9,7 @@ import proximity
 from proximity.posed import to_local
 from proximity.results import asdict
 from proximity.testing import exact, examples
-from proximity.testing.meshes import icosphere, near_points, torus
+from proximity.testing.meshes import icosphere, near_points, soup, torus
 
 EPS = 2.0**-52
 
@@ -171,3 +171,40 @@ def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit():
         mesh.with_vertices(moved[:-1])
     with pytest.raises(ValueError, match="vertices must be finite"):
         mesh.with_vertices(np.where(np.arange(len(moved))[:, None] == 3, np.nan, moved))
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-30, 1e30])
+@pytest.mark.parametrize("kind", ["sphere", "soup"])
+def test_refitted_bounds_hold_every_face_below(kind, scale):
+    # The refit merges its children's ranges rather than measuring them:
+    # every node's box and slabs must still hold the vertices of its faces,
+    # after a twist that turns the faces far from their frames; with faces
+    # of zero area (no normal) among them too.
+    if kind == "sphere":
+        vertices, faces = icosphere(3)
+    else:
+        vertices, faces = soup(np.random.default_rng(3), 600, degenerate=0.3)
+        vertices = vertices - 0.5
+    vertices = vertices * scale
+    mesh = proximity.TriangleMesh(vertices, faces)
+    x, y, z = vertices.T
+    angle = 1.5 * z / scale
+    twisted = np.stack([np.cos(angle) * x - np.sin(angle) * y, np.sin(angle) * x + np.cos(angle) * y, z], 1)
+    tree = mesh.with_vertices(twisted)._tree
+    corners = tree.params[:, :9].reshape(-1, 3, 3)
+    child, count, bounds = tree.child, tree.count, tree.bounds
+
+    def rows(i):
+        if count[i] > 0:
+            return np.arange(child[i], child[i] + count[i])
+        return np.concatenate([rows(child[i]), rows(child[i] + 1)])
+
+    for i in range(len(child)):
+        points = corners[rows(i)].reshape(-1, 3)
+        assert (points >= bounds[i, :3]).all() and (points <= bounds[i, 3:6]).all()
+        # Within the few eps of the coordinates' magnitude that the pruning
+        # allows for (a leaf's ranges are measured, and round as NumPy's do).
+        slack = 16 * EPS * np.abs(points).max()
+        for c in (6, 11, 16):
+            h = points @ bounds[i, c : c + 3]
+            assert (h >= bounds[i, c + 3] - slack).all() and (h <= bounds[i, c + 4] + slack).all(), (i, c)

@@ -117,7 +117,6 @@ def _scale(px, py, pz, magnitude):
     return math.ldexp(1.0, -max(math.frexp(m)[1], -1000))
 
 
-
 @inline
 def plane_row(cull, k, x0, y0, z0, x1, y1, z1, x2, y2, z2):
     """Row ``k`` of :func:`primitive_cull` for the hull of three points (a
@@ -143,7 +142,6 @@ def plane_row(cull, k, x0, y0, z0, x1, y1, z1, x2, y2, z2):
         low, high = -math.inf, math.inf
     cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
     cull[k, 9], cull[k, 10] = low, high
-
 
 
 @inline

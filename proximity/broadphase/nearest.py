@@ -81,7 +81,6 @@ def _visiting_order(points):
     return _morton_order(points)
 
 
-
 def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     """Nearest primitive to each of the validated points ``(n, 3)``.
 
@@ -138,7 +137,6 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     result = out._asdict()
     del result["undecided"]
     return result
-
 
 
 def _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff):

@@ -37,9 +37,7 @@ NONE = -1  # the feature of a row with no answer
 TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bounds child count")
 #: The search's outputs; ``extra`` holds up to three of the primitive's
 #: result values and ``flag`` its boolean one (see :mod:`proximity.primitives`).
-Outputs = collections.namedtuple(
-    "Outputs", "distance sqr_distance point feature extra flag index undecided"
-)
+Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature extra flag index undecided")
 
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
@@ -262,7 +260,6 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
             prim[i] = best_index
 
 
-
 @inline
 def _rounded(r, radius, px, py, pz, certify):
     """A primitive's answer ``r`` for the primitive rounded by ``radius``:
@@ -390,4 +387,3 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
             stack[sp + 1] = child[node] + 1
             sp += 2
     return found
-
