@@ -64,9 +64,8 @@ def _jobs(method):
 
 
 def _broad_phase():
-    """The hierarchy's build, refit, visiting order and candidate search, on a small mesh."""
-    from .broadphase import _alloc, build, traverse
-    from .broadphase.nearest import _morton_order
+    """The hierarchy's build, refits and candidate search, on a small mesh."""
+    from .broadphase import _alloc, build, refit, traverse
 
     rng = np.random.default_rng(0)
     width = primitives.N_PARAMS
@@ -77,10 +76,12 @@ def _broad_phase():
     _alloc._empty(1, 1)
     readonly = _alloc.readonly
     _alloc._take_rows(readonly(params, np.float64), readonly([1, 0], np.int64), np.empty((2, width)))
-    vertices, faces = readonly(params[:, :3], np.float64), readonly([[0, 1, 2]], np.int64)
-    build.build_faces(vertices, faces, 0)
+    # Enough faces for a tree of more than one leaf, which the refit fits.
+    vertices = readonly(params[:, :3], np.float64)
+    faces = readonly([[k, (k + 1) % 8, (k + 3) % 8] for k in range(8)], np.int64)
+    built = build.build_faces(vertices, faces, 0)
+    refit.refit_faces(vertices, faces, built.index, built.child, built.count, built.kinds)
     points = readonly(rng.random((2, 3)), np.float64)
-    _morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     traverse._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)

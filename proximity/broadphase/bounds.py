@@ -93,10 +93,17 @@ def _bound_sqr(boxes, k, s, qx, qy, qz):
     ``boxes[k]`` is ``(lo, hi)`` and three slabs ``(u, h_min, h_max)``
     across orthogonal axes; see the module docstring.
     """
+    return max(_box_sqr(boxes, k, s, qx, qy, qz), _slabs_sqr(boxes, k, s, qx, qy, qz))
+
+
+@inline
+def _slabs_sqr(boxes, k, s, qx, qy, qz):
+    """Squared distance from the scaled point to node ``k``'s oriented box
+    (its three slabs), a lower bound as :func:`_bound_sqr`'s."""
     hu = _excess(boxes, k, 6, s, qx, qy, qz)
     hv = _excess(boxes, k, 11, s, qx, qy, qz)
     hw = _excess(boxes, k, 16, s, qx, qy, qz)
-    return max(_box_sqr(boxes, k, s, qx, qy, qz), hu * hu + hv * hv + hw * hw)
+    return hu * hu + hv * hv + hw * hw
 
 
 @inline

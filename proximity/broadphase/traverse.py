@@ -28,7 +28,7 @@ from numba.core import types
 from .. import certified
 from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
-from .bounds import SLACK, _bound_sqr, _culled, _scale
+from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
 NONE = -1  # the feature of a row with no answer
@@ -137,8 +137,13 @@ def _descend(
         else:
             left = child[node]
             right = left + 1
-            dl = _bound_sqr(bounds, left, s, qx, qy, qz)
-            dr = _bound_sqr(bounds, right, s, qx, qy, qz)
+            # The oriented box only where the box alone does not prune.
+            dl = _box_sqr(bounds, left, s, qx, qy, qz)
+            if dl <= limit:
+                dl = max(dl, _slabs_sqr(bounds, left, s, qx, qy, qz))
+            dr = _box_sqr(bounds, right, s, qx, qy, qz)
+            if dr <= limit:
+                dr = max(dr, _slabs_sqr(bounds, right, s, qx, qy, qz))
             if dr < dl:
                 left, right, dl, dr = right, left, dr, dl
             if dl <= limit:
