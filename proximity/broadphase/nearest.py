@@ -36,9 +36,8 @@ def _morton_order(points):
     bits, each a radix sort of 16-bit keys.
     """
     top = (1 << MORTON_BITS) - 1
-    finite = np.isfinite(points).all(axis=1)
-    every = bool(finite.all())
-    kept = points if every else points[finite]
+    every = bool(np.isfinite(points).all())
+    kept = points if every else points[np.isfinite(points).all(axis=1)]
     if len(kept) == 0:
         return np.arange(len(points))
     low, high = kept.min(axis=0), kept.max(axis=0)
