@@ -21,6 +21,7 @@ from ._meshlike import vertices_and_faces
 from ._validate import (
     as_float64,
     as_index_array,
+    cutoff,
     freeze_fields,
     freeze_result,
     frozen,
@@ -148,7 +149,7 @@ class TriangleMesh(Collection):
     def __setstate__(self, state):
         super().__setstate__({"_signs": None, "_winding": None, "_normals": None, **state})
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD, sign="auto"):
+    def signed_distance(self, points, *args, method=DEFAULT_METHOD, sign="auto", max_distance=None):
         """Distance to the surface, negative inside the mesh, positive outside.
 
         Parameters
@@ -166,6 +167,10 @@ class TriangleMesh(Collection):
             point, on a closed manifold mesh; it warns where the mesh is not a
             solid.  ``"winding"``: inside where the winding number's
             magnitude exceeds 1/2, on any mesh.
+        max_distance : float, optional, keyword-only
+            A cutoff: a point farther from the surface gets ``-inf`` inside
+            and ``+inf`` outside (its side from the winding number), and the
+            search skips what lies beyond it; the others are as without it.
 
         Returns
         -------
@@ -241,7 +246,7 @@ class TriangleMesh(Collection):
         """
         if args:
             raise keyword_only(self, "signed_distance", args)
-        out_shape, distance, inside, _ = self._signed(points, method, sign)
+        out_shape, distance, inside, _ = self._signed(points, method, sign, max_distance)
         signed = np.where(inside, -distance, distance) + 0.0  # -0.0 + 0.0 is +0.0
         return freeze_result(signed.reshape(out_shape))[()]
 
@@ -278,13 +283,15 @@ class TriangleMesh(Collection):
         out_shape, distance, inside, _ = self._signed(points, method, sign)
         return freeze_result((inside | (distance == 0)).reshape(out_shape))[()]
 
-    def signed(self, points, *args, method=DEFAULT_METHOD, sign="auto"):
+    def signed(self, points, *args, method=DEFAULT_METHOD, sign="auto", max_distance=None):
         """:meth:`signed_distance` and :meth:`contains` in one query, and whether each side is certain.
 
         Parameters
         ----------
         points : array_like, shape ``(..., 3)``
         method, sign : str, keyword-only
+            As in :meth:`signed_distance`.
+        max_distance : float, optional, keyword-only
             As in :meth:`signed_distance`.
 
         Returns
@@ -323,7 +330,7 @@ class TriangleMesh(Collection):
         """
         if args:
             raise keyword_only(self, "signed", args)
-        out_shape, distance, inside, certain = self._signed(points, method, sign)
+        out_shape, distance, inside, certain = self._signed(points, method, sign, max_distance)
         signed = np.where(inside, -distance, distance) + 0.0
         return SignedResult(
             signed_distance=signed.reshape(out_shape),
@@ -519,10 +526,13 @@ class TriangleMesh(Collection):
             object.__setattr__(self, "_signs", state)  # a cache: the mesh does not change
         return state
 
-    def _signed(self, points, method, sign):
-        """``(output shape, distances (n,), inside (n,), certain (n,))`` for :meth:`signed_distance`."""
+    def _signed(self, points, method, sign, max_distance=None):
+        """``(output shape, distances (n,), inside (n,), certain (n,))`` for
+        :meth:`signed_distance`; rows beyond ``max_distance`` at an infinite
+        distance, their side from the winding number."""
         if sign not in SIGNS:
             raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
+        cut = cutoff(max_distance)
         _signed = _lazy.load("proximity._signed")
 
         use_winding = sign == "winding"
@@ -548,23 +558,33 @@ class TriangleMesh(Collection):
                                   stacklevel=3)  # fmt: skip
                 use_winding = sign == "auto" or state.signs is None
         if use_winding:
-            distance = np.asarray(self.distance(points, method=method))
+            distance = np.asarray(self.distance(points, method=method, max_distance=max_distance))
             out_shape = distance.shape
             distance = distance.reshape(-1)
             flat = as_float64(points, "points", "(..., 3)").reshape(-1, 3)
             inside, certain = self._winding_sides(flat, distance)
             return out_shape, distance, inside, certain
-        r = self.closest_point(points, method=method)
+        r = self.closest_point(points, method=method, max_distance=max_distance)
         distance = np.asarray(r.distance)
         out_shape = distance.shape
         distance = distance.reshape(-1)
         flat = as_float64(points, "points", "(..., 3)").reshape(-1, 3)
         face, feature = r.face.reshape(-1), r.feature.reshape(-1)
+        near = distance <= cut  # NaN rows too: the pseudonormal leaves them out
+        near |= np.isnan(distance)
         inside, certain = _signed.inside(
-            state.signs, self.vertices, state.faces, flat, face, feature, distance,
+            state.signs, self.vertices, state.faces, flat[near], face[near], feature[near], distance[near],
             flip=state.validity.inverted, winding=self._winding_sides,
         )  # fmt: skip
-        return out_shape, distance, inside, certain
+        if near.all():
+            return out_shape, distance, inside, certain
+        # Beyond the cutoff there is no closest feature: the winding number tells the side.
+        far_inside, far_certain = self._winding_sides(flat[~near], distance[~near])
+        inside_all = np.empty(len(distance), dtype=bool)
+        certain_all = np.empty(len(distance), dtype=bool)
+        inside_all[near], certain_all[near] = inside, certain
+        inside_all[~near], certain_all[~near] = far_inside, far_certain
+        return out_shape, distance, inside_all, certain_all
 
     def _winding_sides(self, points, distance):
         """``(inside, certain)`` by the winding number for ``points`` ``(n, 3)`` at ``distance``

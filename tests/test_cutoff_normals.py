@@ -54,12 +54,14 @@ def _points(shape, n=600, seed=0):
 def test_cutoff_rows_within_are_the_same_bits_and_rows_beyond_are_infinite(name):
     shape = SHAPES[name]()
     points = _points(shape)
+    points[:2] = np.nan  # NaN rows stay NaN rows
+    points[2] = np.inf
     for method in shape.methods:
         full = shape.closest_point(points, method=method)
-        limit = float(np.median(full.distance))
+        limit = float(np.nanmedian(full.distance))
         cut = shape.closest_point(points, method=method, max_distance=limit)
-        within = np.asarray(full.distance) <= limit
-        assert within.any() and (~within).any()
+        within = (np.asarray(full.distance) <= limit) | np.isnan(full.distance)
+        assert np.isnan(full.distance).any() and (~within).any()
         for field, value in asdict(full).items():
             got = np.asarray(getattr(cut, field))
             np.testing.assert_array_equal(got[within], np.asarray(value)[within], err_msg=f"{name} {field}")
@@ -98,6 +100,34 @@ def test_rounded_signed_distances_beyond_the_cutoff_are_positive_infinity():
     pill = proximity.Capsule([[0, 0, 0], [0, 0, 4]], 0.5)
     signed = pill.signed_distance([[0, 0, 2], [3, 0, 2], [9, 0, 2]], max_distance=3.0)
     assert signed.tolist() == [-0.5, 2.5, math.inf]
+
+
+@pytest.mark.parametrize("sign", ["auto", "winding"])
+def test_mesh_signed_distances_beyond_the_cutoff_are_infinite_by_side(sign):
+    # A sphere inside an inverted larger one: a shell, whose hollow is
+    # outside; points in the solid more than 0.3 from both surfaces get -inf.
+    small, faces = icosphere(3)
+    vertices = np.concatenate([small, small * 3.0])
+    shell = proximity.TriangleMesh(vertices, np.concatenate([faces[:, ::-1], faces + len(small)]))
+    rng = np.random.default_rng(4)
+    points = rng.normal(size=(600, 3)) * 2.0
+    points[0] = np.nan
+    full = shell.signed_distance(points, sign=sign)
+    cut = shell.signed_distance(points, sign=sign, max_distance=0.3)
+    within = np.abs(full) <= 0.3
+    np.testing.assert_array_equal(cut[within], full[within])
+    beyond = ~within & ~np.isnan(full)
+    assert beyond.sum() > 100 and (full[beyond] < 0).any() and (full[beyond] > 0).any()
+    np.testing.assert_array_equal(cut[beyond], np.where(full[beyond] < 0, -math.inf, math.inf))
+    assert np.isnan(cut[0])
+    r = shell.signed(points, sign=sign, max_distance=0.3)
+    np.testing.assert_array_equal(r.signed_distance, cut)
+    assert r.certain[beyond].all()
+    # Posed, the same answers at the moved points.
+    T = np.eye(4)
+    T[:3, 3] = [5.0, -1.0, 2.0]
+    posed = shell.transformed(T).signed_distance(points + T[:3, 3], sign=sign, max_distance=0.3)
+    np.testing.assert_array_equal(np.isinf(posed), np.isinf(cut))
 
 
 # -- normals ------------------------------------------------------------------------------------------

@@ -154,7 +154,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                 if best_index != before:
                     winner = a
         undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
-        if best > cutoff or (best_k < 0 and cutoff < math.inf and finite):
+        if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
             best_k = -1
             dist[i] = math.inf
             if full:

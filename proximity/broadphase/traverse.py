@@ -227,7 +227,7 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
         # every candidate up to the bound exactly, outside the kernel.
         undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
         finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
-        if best > cutoff or (best_k < 0 and cutoff < math.inf and finite):
+        if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
             # Nothing within the cutoff (or an answer beyond it).
             best_k = -1
             dist[i] = math.inf
