@@ -81,6 +81,9 @@ def _broad_phase():
     faces = readonly([[k, (k + 1) % 8, (k + 3) % 8] for k in range(8)], np.int64)
     built = build.build_faces(vertices, faces, 0)
     refit.refit_faces(vertices, faces, built.index, built.child, built.count, built.kinds)
+    # And a tree of one leaf, whose rows are gathered alone.
+    built = build.build_faces(vertices, faces[:2], 0)
+    refit.refit_faces(vertices, faces[:2], built.index, built.child, built.count, built.kinds)
     points = readonly(rng.random((2, 3)), np.float64)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)

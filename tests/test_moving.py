@@ -154,8 +154,15 @@ def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
     np.testing.assert_array_equal(got.source, first)
 
 
-def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit():
-    vertices, faces = torus(40, 20)
+_TETRAHEDRON = (
+    np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
+    [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+)
+
+
+@pytest.mark.parametrize("shape", [torus(40, 20), _TETRAHEDRON], ids=["tree", "one leaf"])
+def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit(shape):
+    vertices, faces = shape
     mesh = proximity.TriangleMesh(vertices, faces)
     rng = np.random.default_rng(9)
     moved = vertices * [1.3, 0.8, 1.1] + rng.normal(size=vertices.shape) * 0.01

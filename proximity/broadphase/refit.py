@@ -346,6 +346,12 @@ def _gather_rows(vertices, faces, order, params, cull, first, last):
         plane_row(cull, k, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
 
 
+@kernel()
+def _gather_faces(vertices, faces, order, params, cull):
+    """Every row of a tree of one leaf (see :func:`_gather_rows`)."""
+    _gather_rows(vertices, faces, order, params, cull, 0, order.shape[0])
+
+
 @kernel(parallel=True)
 def _fit_faces(
     vertices, faces, order, params, cull, bounds, top, tasks, start, end, child, count, kinds, hull
@@ -446,7 +452,7 @@ def refit_faces(vertices, faces, order, child, count, kinds):
         readonly(order, np.int64),
     )
     if len(child) == 1:
-        _gather_rows(vertices, faces, order, params, cull, 0, len(order))
+        _gather_faces(vertices, faces, order, params, cull)
         return params, cull, refit(child, count, kinds, params, cull)
     top, tasks, start, end = _refit_top(child, count)
     bounds = _pool.empty((len(child), NODE_COLUMNS))
