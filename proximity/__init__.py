@@ -4,6 +4,8 @@ Point-triangle, point-circle and point-disk distance, on single points and
 NumPy batches, behind one shape protocol.
 """
 
+from __future__ import annotations
+
 import importlib.machinery
 import os
 import sys
@@ -43,6 +45,7 @@ _map_source_adapters()
 from . import _pool  # noqa: E402
 from ._counts import stats as certified_stats  # noqa: E402
 from ._threads import threads  # noqa: E402
+from ._typing import ArrayLike, Distances  # noqa: E402
 from ._validate import keyword_only_signature  # noqa: E402
 from .inflated import Capsule, Inflated, Sphere  # noqa: E402
 from .mesh import TriangleMesh  # noqa: E402
@@ -112,7 +115,13 @@ def _check(shape):
 
 
 @keyword_only_signature
-def closest_point(shape, points, *args, method=DEFAULT_METHOD):
+def closest_point(
+    shape: Shape,
+    points: ArrayLike,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> Result:
     """Closest point on ``shape`` to each of ``points``.
 
     The function form of ``shape.closest_point(points, method=method)``.
@@ -141,6 +150,11 @@ def closest_point(shape, points, *args, method=DEFAULT_METHOD):
         ``"eberly"`` (triangles, circles, disks and meshes) is Eberly's
         algorithm as written, kept as a baseline.  The bounds are in
         ``docs/accuracy.md``.
+    max_distance : float, optional, keyword-only
+        A cutoff: a point farther than it from the shape gets an infinite
+        distance, a NaN point, feature ``Feature.NONE`` and index ``-1``,
+        and the search skips what lies beyond it; the other rows are the
+        same bits as without it.  None (default): no cutoff.
 
     Returns
     -------
@@ -172,11 +186,17 @@ def closest_point(shape, points, *args, method=DEFAULT_METHOD):
             "closest_point() takes two positional arguments, shape and points; method is keyword-only: "
             f"closest_point(shape, points, method={args[0]!r})"
         )
-    return shape.closest_point(points, method=method)
+    return shape.closest_point(points, method=method, max_distance=max_distance)
 
 
 @keyword_only_signature
-def distance(shape, points, *args, method=DEFAULT_METHOD):
+def distance(
+    shape: Shape,
+    points: ArrayLike,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> Distances:
     """Distance from each of ``points`` to ``shape``.
 
     The function form of ``shape.distance(points, method=method)``: any
@@ -191,6 +211,8 @@ def distance(shape, points, *args, method=DEFAULT_METHOD):
         As in :func:`closest_point`.
     method : str, keyword-only
         As in :func:`closest_point`; default ``"robust"``.
+    max_distance : float, optional, keyword-only
+        As in :func:`closest_point`: ``inf`` beyond it.
 
     Returns
     -------
@@ -214,10 +236,10 @@ def distance(shape, points, *args, method=DEFAULT_METHOD):
             "distance() takes two positional arguments, shape and points; method is keyword-only: "
             f"distance(shape, points, method={args[0]!r})"
         )
-    return shape.distance(points, method=method)
+    return shape.distance(points, method=method, max_distance=max_distance)
 
 
-def release_memory():
+def release_memory() -> int:
     """Give back to the system the memory kept for the outputs of later batches.
 
     The outputs of a large batch (from 1 MB), and the arrays of a refitted

@@ -6,13 +6,23 @@ answer to the per-shape method.  The broad phase (:mod:`proximity.broadphase`) i
 chosen once, at construction.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from . import _lazy, _threads
+from ._typing import ArrayLike, Distances, Transform
 from ._validate import as_float64, cutoff, freeze_result, frozen
 from .primitives import N_PARAMS
 from .results import attach
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
+
+if TYPE_CHECKING:
+    from .inflated import Inflated
+    from .posed import Posed
+    from .results import Result
 
 BROAD_PHASES = ("auto", "brute", "bvh")
 
@@ -151,7 +161,7 @@ class Collection(Frozen):
         fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
         out["normal"] = outward(out["point"], on_core, radius, fallback)
 
-    def transformed(self, transform):
+    def transformed(self, transform: Transform) -> Posed:
         """The shape moved by the rigid ``transform`` (4x4), as a view that
         shares its data: :class:`proximity.Posed`, in O(1).
 
@@ -166,14 +176,20 @@ class Collection(Frozen):
 
         return Posed(self, transform)
 
-    def inflated(self, radius):
+    def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the collection's surface: a thick
         shell of a mesh, rounded primitives of a scene (:class:`proximity.Inflated`)."""
         from .inflated import Inflated
 
         return Inflated(self, radius)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the nearest primitive.
 
         Parameters
@@ -204,7 +220,13 @@ class Collection(Frozen):
         out_shape, out = self._query(points, method, full=False, max_distance=max_distance)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """Closest point, its distance and the nearest primitive, for each point.
 
         Parameters
@@ -254,7 +276,13 @@ class Collection(Frozen):
         kinds, params = self._primitives(index)
         return surface_directions(kinds, params)
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Signed distance to the nearest primitive: ``d - r`` for a rounded
         one, negative inside it (:class:`proximity.Inflated`); for the
         others, the distance.

@@ -20,13 +20,23 @@ subtraction cancels) the exact squared distance is narrowed until the
 rounding of ``sqrt(s) - r`` is decided (:func:`proximity._exact.minus_radius`).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from . import primitives
 from ._rounding import certify_difference, outward, surface_points
+from ._typing import ArrayLike, Bools, Distances, Floats, Transform
 from ._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
 from .results import asdict, beyond, format_repr
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
+
+if TYPE_CHECKING:
+    from .posed import Posed
+    from .results import Result
+    from .shapes import Shape
 
 __all__ = ["Capsule", "Inflated", "Sphere"]
 
@@ -68,7 +78,7 @@ class Inflated(Frozen):
     __slots__ = ("core", "radius", "batch_shape", "dim")
     _public = ("__init__", "distance", "closest_point", "signed_distance", "contains")
 
-    def __init__(self, core, radius, *, copy=False):
+    def __init__(self, core: Shape, radius: ArrayLike, *, copy: bool = False) -> None:
         if not hasattr(core, "_rows") or not hasattr(core, "closest_point"):
             raise TypeError(f"core must be a proximity shape; got {type(core).__name__}")
         r = frozen_float64(radius, "radius", "(...)", copy)
@@ -86,19 +96,19 @@ class Inflated(Frozen):
         self._init(core=core, radius=r, batch_shape=batch, dim=core.dim)
 
     @property
-    def methods(self):
+    def methods(self) -> tuple[str, ...]:
         """The values ``method`` accepts: the core's."""
         return self.core.methods
 
     @property
-    def result_type(self):
+    def result_type(self) -> type[Result]:
         """The class of :meth:`closest_point`'s results: the core's."""
         return self.core.result_type
 
     def __repr__(self):
         return format_repr(self, ("radius",), core=self.core)
 
-    def transformed(self, transform):
+    def transformed(self, transform: Transform) -> Posed:
         """The shape moved by the rigid ``transform`` (4x4), as a view that
         shares its data: :class:`proximity.Posed`, in O(1).
 
@@ -113,7 +123,7 @@ class Inflated(Frozen):
 
         return Posed(self, transform)
 
-    def inflated(self, radius):
+    def inflated(self, radius: ArrayLike) -> Inflated:
         """The points within ``radius`` of this rounded shape: the core
         inflated by the sum of the radii (rounded to a float)."""
         return Inflated(self, radius)
@@ -157,7 +167,13 @@ class Inflated(Frozen):
         """Per flat row of ``rows``: ``(primitive, params, point)`` of the core's nearest primitive."""
         return _primitive_rows(self.core, core, points, shape, rows)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the rounded solid: ``max(d - r, 0)``.
 
         Parameters and broadcasting are those of :func:`proximity.distance`;
@@ -169,7 +185,13 @@ class Inflated(Frozen):
         e, _, _ = self._answer(points, method, full=False)
         return _frozen(beyond(np.maximum(e, 0.0) + 0.0, limit))
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Signed distance to the rounded solid's surface, ``d - r``: negative inside.
 
         Examples
@@ -185,14 +207,20 @@ class Inflated(Frozen):
         e, _, _ = self._answer(points, method, full=False)
         return _frozen(beyond(e + 0.0, limit))
 
-    def contains(self, points, *args, method=DEFAULT_METHOD):
+    def contains(self, points: ArrayLike, *args: object, method: str = DEFAULT_METHOD) -> Bools:
         """Whether each point is in the rounded solid: within ``r`` of the core."""
         if args:
             raise keyword_only(self, "contains", args)
         e, _, _ = self._answer(points, method, full=False)
         return _frozen(e <= 0.0)
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """The nearest point of the rounded solid's surface to each point.
 
         Returns the core's result type: ``distance`` and ``sqr_distance``
@@ -242,13 +270,13 @@ class Sphere(Inflated):
 
     __slots__ = ()
 
-    def __init__(self, center, radius, *, copy=False):
+    def __init__(self, center: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
         from .shapes import Point
 
         super().__init__(Point(center, copy=copy), radius, copy=copy)
 
     @property
-    def center(self):
+    def center(self) -> Floats:
         """The centers, ``batch + (D,)``."""
         return self.core.position
 
@@ -271,13 +299,13 @@ class Capsule(Inflated):
 
     __slots__ = ()
 
-    def __init__(self, vertices, radius, *, copy=False):
+    def __init__(self, vertices: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
         from .shapes import Segment
 
         super().__init__(Segment(vertices, copy=copy), radius, copy=copy)
 
     @property
-    def vertices(self):
+    def vertices(self) -> Floats:
         """The segments' endpoints, ``batch + (2, D)``."""
         return self.core.vertices
 

@@ -10,14 +10,19 @@ every face, and why that never changes the answer, is in
 :mod:`proximity.broadphase`.
 """
 
+from __future__ import annotations
+
 import dataclasses
 import warnings
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import _lazy, _threads
 from ._collection import Collection
 from ._meshlike import vertices_and_faces
+from ._typing import ArrayLike, Bools, Distances, Floats
 from ._validate import (
     as_float64,
     as_index_array,
@@ -31,6 +36,10 @@ from ._validate import (
 from .primitives import TRIANGLE
 from .results import MeshResult, _frozen, format_repr
 from .shapes import DEFAULT_METHOD, keyword_only
+
+if TYPE_CHECKING:
+    from .validity import Validity
+    from .winding import WindingResult
 
 #: How :meth:`TriangleMesh.signed_distance` and :meth:`TriangleMesh.contains`
 #: tell inside from outside.
@@ -100,7 +109,7 @@ class TriangleMesh(Collection):
     methods = TRIANGLE.methods
     result_type = MeshResult
 
-    def __init__(self, vertices, faces=None, *, broad_phase="auto"):
+    def __init__(self, vertices: Any, faces: ArrayLike | None = None, *, broad_phase: str = "auto") -> None:
         if faces is None:
             vertices, faces = vertices_and_faces(vertices)
         v = frozen_float64(vertices, "vertices", "(V, 3)")
@@ -135,7 +144,7 @@ class TriangleMesh(Collection):
         return len(self.faces)
 
     @property
-    def triangles(self):
+    def triangles(self) -> Floats:
         """The faces' vertices, ``(F, 3, 3)``: a new array."""
         return self.vertices[self.faces]
 
@@ -149,7 +158,14 @@ class TriangleMesh(Collection):
     def __setstate__(self, state):
         super().__setstate__({"_signs": None, "_winding": None, "_normals": None, **state})
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD, sign="auto", max_distance=None):
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        sign: str = "auto",
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance to the surface, negative inside the mesh, positive outside.
 
         Parameters
@@ -250,7 +266,9 @@ class TriangleMesh(Collection):
         signed = np.where(inside, -distance, distance) + 0.0  # -0.0 + 0.0 is +0.0
         return freeze_result(signed.reshape(out_shape))[()]
 
-    def contains(self, points, *args, method=DEFAULT_METHOD, sign="auto"):
+    def contains(
+        self, points: ArrayLike, *args: object, method: str = DEFAULT_METHOD, sign: str = "auto"
+    ) -> Bools:
         """Whether each point is in the mesh: inside, or on the surface.
 
         Parameters
@@ -283,7 +301,14 @@ class TriangleMesh(Collection):
         out_shape, distance, inside, _ = self._signed(points, method, sign)
         return freeze_result((inside | (distance == 0)).reshape(out_shape))[()]
 
-    def signed(self, points, *args, method=DEFAULT_METHOD, sign="auto", max_distance=None):
+    def signed(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        sign: str = "auto",
+        max_distance: float | None = None,
+    ) -> SignedResult:
         """:meth:`signed_distance` and :meth:`contains` in one query, and whether each side is certain.
 
         Parameters
@@ -338,7 +363,16 @@ class TriangleMesh(Collection):
             certain=certain.reshape(out_shape),
         )
 
-    def sdf_grid(self, lower, upper, shape, *args, max_distance=None, method=DEFAULT_METHOD, sign="auto"):
+    def sdf_grid(
+        self,
+        lower: ArrayLike,
+        upper: ArrayLike,
+        shape: Sequence[int],
+        *args: object,
+        max_distance: float | None = None,
+        method: str = DEFAULT_METHOD,
+        sign: str = "auto",
+    ) -> Floats:
         """Signed distances at the points of a regular grid, with an optional narrow band.
 
         Parameters
@@ -422,7 +456,7 @@ class TriangleMesh(Collection):
 
         return _grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)
 
-    def winding_number(self, points, *args, full=False):
+    def winding_number(self, points: ArrayLike, *args: object, full: bool = False) -> WindingResult:
         """The generalized winding number at each point, with a bound on its error.
 
         Parameters
@@ -484,7 +518,7 @@ class TriangleMesh(Collection):
         )
 
     @property
-    def validity(self):
+    def validity(self) -> Validity:
         """Whether the mesh bounds a solid, and why not: a :class:`proximity.validity.Validity`.
 
         Checked at the first access (or signed query) and kept with the
@@ -619,7 +653,7 @@ class TriangleMesh(Collection):
             w[rest], e[rest] = winding.numbers(h, points[rest], rule=winding.INTEGRAL)
         return w, e, True
 
-    def with_vertices(self, vertices):
+    def with_vertices(self, vertices: ArrayLike) -> TriangleMesh:
         """The mesh with the same faces over moved ``vertices``: its hierarchy
         refitted, not rebuilt.
 

@@ -20,11 +20,21 @@ exactly posed shape, which is not representable in floating point: its
 vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
+from ._typing import ArrayLike, Bools, Distances, Floats, Transform
 from ._validate import as_float64, freeze_result, frozen
 from .results import asdict, attach, format_repr
 from .shapes import DEFAULT_METHOD, Frozen, keyword_only
+
+if TYPE_CHECKING:
+    from .inflated import Inflated
+    from .results import Result
+    from .shapes import Shape
 
 __all__ = ["RIGID_TOLERANCE", "Posed", "rigid"]
 
@@ -105,7 +115,7 @@ class Posed(Frozen):
     __slots__ = ("shape", "rotation", "translation", "batch_shape", "dim")
     _public = ("__init__", "distance", "closest_point")
 
-    def __init__(self, shape, transform):
+    def __init__(self, shape: Shape, transform: Transform) -> None:
         if not hasattr(shape, "closest_point") or not hasattr(shape, "batch_shape"):
             raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
         if shape.dim != 3:
@@ -129,17 +139,17 @@ class Posed(Frozen):
         return view
 
     @property
-    def methods(self):
+    def methods(self) -> tuple[str, ...]:
         """The values ``method`` accepts: the shape's."""
         return self.shape.methods
 
     @property
-    def result_type(self):
+    def result_type(self) -> type[Result]:
         """The class of :meth:`closest_point`'s results: the shape's."""
         return self.shape.result_type
 
     @property
-    def transform(self):
+    def transform(self) -> Floats:
         """The 4x4 matrix of the pose."""
         m = np.eye(4)
         m[:3, :3], m[:3, 3] = self.rotation, self.translation
@@ -148,11 +158,11 @@ class Posed(Frozen):
     def __repr__(self):
         return format_repr(self, ("rotation", "translation"), shape=self.shape)
 
-    def transformed(self, transform):
+    def transformed(self, transform: Transform) -> Posed:
         """The view moved by ``transform`` as well: the composed pose."""
         return Posed(self, transform)
 
-    def inflated(self, radius):
+    def inflated(self, radius: ArrayLike) -> Inflated:
         """The points within ``radius`` of the posed shape (:class:`proximity.Inflated`)."""
         from .inflated import Inflated
 
@@ -165,13 +175,26 @@ class Posed(Frozen):
             raise ValueError(f"points must have shape (..., 3); got shape {p.shape}")
         return p, to_local(p, self.rotation, self.translation)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the posed shape; see :func:`proximity.distance`."""
         if args:
             raise keyword_only(self, "distance", args)
         return self.shape.distance(self._local(points)[1], method=method, max_distance=max_distance)
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None, **options):
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+        **options: Any,
+    ) -> Distances:
         """The shape's signed distance at the moved points (meshes, scenes and rounded shapes)."""
         if args:
             raise keyword_only(self, "signed_distance", args)
@@ -180,13 +203,19 @@ class Posed(Frozen):
             options["max_distance"] = max_distance
         return self.shape.signed_distance(local, method=method, **options)
 
-    def contains(self, points, *args, **options):
+    def contains(self, points: ArrayLike, *args: object, **options: Any) -> Bools:
         """Whether each point is in the posed shape (meshes and rounded shapes)."""
         if args:
             raise keyword_only(self, "contains", args)
         return self.shape.contains(self._local(points)[1], **options)
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """Closest point on the posed shape to each point, in world coordinates.
 
         The result is the shape's, with ``point`` (and ``normal``) moved back

@@ -11,14 +11,22 @@ primitive for small scenes, a bounding-volume hierarchy above
 :data:`BRUTE_FORCE_MAX` primitives.  Both give the same answer, bit for bit.
 """
 
+from __future__ import annotations
+
 import dataclasses
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import primitives
 from ._collection import BRUTE_FORCE_MAX, Collection
+from ._typing import ArrayLike
 from ._validate import frozen
 from .results import SceneResult
+
+if TYPE_CHECKING:
+    from .shapes import Shape
 
 # The shapes a scene takes, for the messages.
 _NAMES = "proximity shape (Triangle, Segment, Point, Disk, Circle, TriangleMesh, Scene or a rounded one)"
@@ -76,7 +84,7 @@ class Scene(Collection):
     _derived = ("_instanced",)
     result_type = SceneResult
 
-    def __init__(self, shapes, *, broad_phase="auto"):
+    def __init__(self, shapes: Iterable[Shape], *, broad_phase: str = "auto") -> None:
         if not isinstance(shapes, (list, tuple)):
             raise TypeError(f"shapes must be a list or tuple of {_NAMES}; got {type(shapes).__name__}")
         # Posed meshes and scenes are instances: their hierarchies are shared,
@@ -143,7 +151,7 @@ class Scene(Collection):
         instances = _Instances(trees, np.array(which, np.int64), self.offsets[jobs], own is not None)
         return {"_instanced": instances.posed(rotation, translation)}
 
-    def with_poses(self, transforms):
+    def with_poses(self, transforms: ArrayLike) -> Scene:
         """The scene with its posed meshes and scenes moved to ``transforms``,
         ``(n, 4, 4)``: one per posed view among :attr:`shapes`, in order.
 

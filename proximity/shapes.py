@@ -6,12 +6,15 @@ The kernels are imported on first use, so that ``import proximity`` does not
 pay for loading the compiler.
 """
 
+from __future__ import annotations
+
 import types
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 from . import _counts, _lazy, _pool, _threads
+from ._typing import ArrayLike, Distances, Floats, Transform
 from ._validate import (
     as_float64,
     broadcast_batch,
@@ -39,6 +42,10 @@ from .results import (
     segment_from_row,
     triangle_from_row,
 )
+
+if TYPE_CHECKING:
+    from .inflated import Inflated
+    from .posed import Posed
 
 DEFAULT_METHOD = DEFAULT
 _FLOAT64 = np.dtype(np.float64)
@@ -79,10 +86,10 @@ class Shape(Protocol):
     dim: int
     methods: tuple
 
-    def closest_point(self, points, *, method: str = DEFAULT_METHOD) -> Result:
+    def closest_point(self, points: ArrayLike, *, method: str = DEFAULT_METHOD) -> Result:
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
 
-    def distance(self, points, *, method: str = DEFAULT_METHOD) -> np.ndarray:
+    def distance(self, points: ArrayLike, *, method: str = DEFAULT_METHOD) -> Distances:
         """Distance from each point to the shape; see :func:`proximity.distance`."""
 
 
@@ -126,6 +133,7 @@ class Frozen:
                 function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
             )
             copy.__kwdefaults__ = function.__kwdefaults__
+            copy.__annotations__ = dict(function.__annotations__)
             copy.__doc__ = function.__doc__
             copy.__qualname__ = f"{cls.__name__}.{name}"
             copy.__module__ = cls.__module__
@@ -203,7 +211,7 @@ class _Facade(Frozen):
             args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
         return type(self)(*args)
 
-    def transformed(self, transform):
+    def transformed(self, transform: Transform) -> Posed:
         """The shape moved by the rigid ``transform`` (4x4), as a view that
         shares its data: :class:`proximity.Posed`, in O(1).
 
@@ -218,7 +226,7 @@ class _Facade(Frozen):
 
         return Posed(self, transform)
 
-    def inflated(self, radius):
+    def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the shape: a rounded solid
         (:class:`proximity.Inflated`), ``radius`` broadcasting with the batch.
 
@@ -293,7 +301,13 @@ class _Facade(Frozen):
             self._kernels().exact_row(row, self._args, point)
         _counts.count(1, int(undecided))
 
-    def distance(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the shape; see :func:`proximity.distance`."""
         if args:
             raise keyword_only(self, "distance", args)
@@ -305,7 +319,13 @@ class _Facade(Frozen):
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD, max_distance=None):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
         if args:
             raise keyword_only(self, "closest_point", args)
@@ -365,7 +385,7 @@ class _Hull(_Facade):
     _corners = 3
     _fields = (("vertices", 2),)  # the constructor's arrays, and their core dimensions
 
-    def __init__(self, vertices, *, copy=False):
+    def __init__(self, vertices: ArrayLike, *, copy: bool = False) -> None:
         n = self._corners
         expected = f"(..., {n}, D) with D = 2 or 3"
         v = frozen_float64(vertices, "vertices", expected, copy)
@@ -495,7 +515,7 @@ class Point(_Hull):
     _from_row = staticmethod(point_from_row)
     _entries = {}
 
-    def __init__(self, position, *, copy=False):
+    def __init__(self, position: ArrayLike, *, copy: bool = False) -> None:
         expected = "(..., D) with D = 2 or 3"
         p = frozen_float64(position, "position", expected, copy)
         if p.ndim < 1 or p.shape[-1] not in (2, 3):
@@ -505,7 +525,7 @@ class Point(_Hull):
         self._init(**self._derive())
 
     @property
-    def position(self):
+    def position(self) -> Floats:
         """The points, ``batch + (D,)``, read-only."""
         return self.vertices[..., 0, :]
 
@@ -522,7 +542,9 @@ class _Round(_Facade):
 
     _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
 
-    def __init__(self, center, normal, radius, *, copy=False):
+    def __init__(
+        self, center: ArrayLike, normal: ArrayLike, radius: ArrayLike, *, copy: bool = False
+    ) -> None:
         c = frozen_float64(center, "center", "(..., 3)", copy)
         n = frozen_float64(normal, "normal", "(..., 3)", copy)
         r = frozen_float64(radius, "radius", "(...)", copy)

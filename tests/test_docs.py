@@ -56,4 +56,8 @@ def test_the_queries_show_their_keyword_only_signature():
     import inspect
 
     for function in (proximity.closest_point, proximity.distance):
-        assert str(inspect.signature(function)) == "(shape, points, *, method='robust')"
+        signature = inspect.signature(function)
+        assert list(signature.parameters) == ["shape", "points", "method", "max_distance"]
+        keyword_only = [p.name for p in signature.parameters.values() if p.kind is p.KEYWORD_ONLY]
+        assert keyword_only == ["method", "max_distance"]
+        assert signature.parameters["method"].default == "robust"
