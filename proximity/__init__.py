@@ -267,20 +267,26 @@ def closest_points(
     ----------
     a, b : Shape
         Two shapes of the same dimension: batches of segments, triangles or
-        points, a :class:`TriangleMesh` or a :class:`Scene`, or any of them
-        rounded (:class:`Inflated`, :class:`Sphere`, :class:`Capsule`).
-        Batches broadcast against each other like points against a shape:
-        ``(N,)`` segments with ``(N,)`` triangles give N pairs, ``(M,)``
-        with ``(N, 1)`` all ``N x M`` pairs; a mesh or a scene is one shape.
-        Disks and circles pair with points only (``NotImplementedError``
-        otherwise).
+        points, a :class:`TriangleMesh` or a :class:`Scene`, posed views of
+        them (``shape.transformed(T)``, searched in place, without a
+        rebuild), or any of them rounded (:class:`Inflated`,
+        :class:`Sphere`, :class:`Capsule`).  Batches broadcast against each
+        other like points against a shape: ``(N,)`` segments with ``(N,)``
+        triangles give N pairs, ``(M,)`` with ``(N, 1)`` all ``N x M``
+        pairs; a mesh or a scene is one shape.  Disks and circles pair with
+        points only, and a scene of posed meshes (instances) is not searched
+        (``NotImplementedError`` naming the argument).
     method : {"robust", "certified"}, keyword-only
         ``robust`` (default) is within ``16 eps S + 2^-1075`` of the exact
         distance, ``S`` the largest coordinate difference between the
         pair's vertices; ``certified`` is faithfully rounded, with the exact
         closest features (lowest feature codes among ties).  Meshes and
         scenes answer with the least of their primitives' pairs, computed
-        by the same method.
+        by the same method, ties to the lowest ``(face_a, face_b)`` (or
+        primitives), except between touching or overlapping shapes, where
+        the search stops at the first common point it finds.  Posed views
+        add the rounding of the pose, a few ``eps`` of the coordinates'
+        magnitude (see :mod:`proximity.posed`).
     max_distance : float, keyword-only, optional
         Nothing within it: ``inf`` distance, NaN points, feature ``NONE``
         and index -1 for pairs farther apart.  It prunes the search of
@@ -308,6 +314,13 @@ def closest_points(
     >>> pills = proximity.Capsule([[[0, 0, 0], [0, 0, 4]], [[3, 0, 0], [3, 0, 4]]], radius=0.5)
     >>> proximity.distance(pills, proximity.Sphere([1, 0, 2], 0.25)).tolist()
     [0.25, 1.25]
+    >>> import numpy as np
+    >>> tet = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    ...                              [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> T = np.eye(4); T[:3, 3] = [0, 0, 3]          # a copy moved up by 3
+    >>> r = proximity.closest_points(tet, tet.transformed(T))
+    >>> float(r.distance), r.point_a.tolist(), r.point_b.tolist()
+    (2.0, [0.0, 0.0, 1.0], [0.0, 0.0, 3.0])
     """
     if args:
         raise TypeError(

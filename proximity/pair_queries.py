@@ -13,7 +13,15 @@ pair registry (:mod:`proximity.pairs`):
 * a rounded shape (:class:`proximity.Inflated`) is its core with a
   radius: the cores' pair with ``d - r_a - r_b`` (certified where that
   subtraction cancels, as :mod:`proximity.inflated` does), negative when
-  the solids overlap, and the witnesses moved onto the surfaces.
+  the solids overlap, and the witnesses moved onto the surfaces;
+* a posed view (:class:`proximity.Posed`) of a mesh or a scene is searched
+  in place, its pose applied on the fly by the descent (side b's): a posed
+  side a is swapped to b, and where both sides are posed, b is posed
+  relative to a, ``[R_a^T R_b | R_a^T (t_b - t_a)]`` rounded, and the
+  witnesses moved back by a's pose, each rounding within a few ``eps``
+  of the coordinates' magnitude (as :mod:`proximity.posed` bounds a posed
+  point query).  A posed batch of segments, triangles or points is the
+  batch of its posed vertices.
 """
 
 import numpy as np
@@ -44,6 +52,14 @@ class _Side:
             core, self.radius = shape.core, shape.radius
         self.core = core
         self.collection = hasattr(core, "_tree")
+        if self.collection and getattr(core, "shapes", None) is not None:
+            from .posed import Posed
+
+            if any(isinstance(s, Posed) for s in core.shapes):
+                raise NotImplementedError(
+                    f"{name} is a scene of posed meshes or scenes (instances), which pair queries do not "
+                    "search; pose the scene itself (scene.transformed(T)) or build it of unposed shapes"
+                )
         self.primitive = getattr(core, "_primitive", None)
         if not self.collection and self.primitive is None:
             raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
@@ -61,6 +77,75 @@ class _Side:
         """The core's vertices as rows ``batch + (3 * vertices,)`` (hull kinds)."""
         v = self.core._vertices3
         return v.reshape(v.shape[:-2] + (3 * v.shape[-2],))
+
+
+def _unposed(shape, name):
+    """``(shape, rotation, translation)``: ``shape`` without its pose, or with it where it is
+    a batch of hull primitives (their vertices posed); ``rotation`` None where unposed.
+
+    Rounding and posing commute (a rigid motion keeps distances), so a posed rounded
+    shape and a rounded posed one are both the rounded shape, posed."""
+    from .inflated import Inflated
+    from .posed import Posed, to_world
+    from .scene import Scene
+    from .shapes import Point, Segment, Triangle
+
+    rotation = translation = None
+    radius = None
+    core = shape
+    while isinstance(core, (Posed, Inflated)):
+        if isinstance(core, Posed):
+            if rotation is None:
+                rotation, translation = core.rotation, core.translation
+            else:  # an outer pose applied to an inner one
+                rotation, translation = rotation @ core.rotation, rotation @ core.translation + translation
+            core = core.shape
+        else:
+            if radius is not None:
+                break
+            radius, core = core.radius, core.core
+    if rotation is None:
+        return shape, None, None
+    if type(core) is Scene and any(isinstance(s, Posed) for s in core.shapes):
+        raise NotImplementedError(
+            f"{name} is a posed scene of posed meshes or scenes (instances), which pair queries do not search"
+        )
+    if type(core) in (Triangle, Segment):
+        core = type(core)(to_world(core.vertices, rotation, translation))
+        rotation = translation = None
+    elif type(core) is Point:
+        core = Point(to_world(core.position, rotation, translation))
+        rotation = translation = None
+    elif not hasattr(core, "_tree"):
+        raise NotImplementedError(
+            f"{name} is a posed {type(core).__name__}: pair queries take posed meshes, scenes, segments, "
+            "triangles and points"
+        )
+    return (core if radius is None else Inflated(core, radius)), rotation, translation
+
+
+def _pose_of(rotation, translation):
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = rotation, translation
+    return pose
+
+
+def _poses(a, b, pose_b, names=("a", "b")):
+    """The pair without its posed views: ``(a, b, pose_b, swap, back)``.  ``swap``: the sides
+    were exchanged (a posed side a becomes side b); ``back``: ``(R, t)`` that moves the
+    answer's points to the world, or None."""
+    if pose_b is not None:
+        return a, b, pose_b, False, None
+    a, ra, ta = _unposed(a, names[0])
+    b, rb, tb = _unposed(b, names[1])
+    if ra is None and rb is None:
+        return a, b, None, False, None
+    if ra is None:
+        return a, b, _pose_of(rb, tb), False, None
+    if rb is None:
+        return b, a, _pose_of(ra, ta), True, None
+    # Both posed: b in a's frame, R_a^T (R_b x + t_b - t_a).
+    return a, b, _pose_of(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
 
 
 def _check_max_distance(max_distance):
@@ -448,7 +533,9 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
         fast = _fast_for(a, b, method)
         if fast is not None:
             return fast.result(fast.run(a, b))
-    out_shape, side_a, side_b, out = _answer(a, b, method, max_distance, True, pose_b=pose_b)
+    a, b, pose_b, swap, back = _poses(a, b, pose_b)
+    names = ("b", "a") if swap else ("a", "b")
+    out_shape, side_a, side_b, out = _answer(a, b, method, max_distance, True, names, pose_b)
     signed = np.asarray(out["signed"], np.float64)
     found = np.isfinite(signed)
     pa, pb = out["point_a"], out["point_b"]
@@ -479,7 +566,13 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
             else:
                 value = np.where(found, value, -1)
             values[f"{name}_{key}"] = value
-    return _result(values, out_shape)
+    if back is not None:
+        from .posed import to_world
+
+        for key in ("point_a", "point_b"):
+            values[key] = to_world(values[key], *back)
+    result = _result(values, out_shape)
+    return result.swapped() if swap else result
 
 
 def _rounded_rows(out):
@@ -502,7 +595,9 @@ def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
         fast = _fast_for(a, b, method)
         if fast is not None:
             return fast.run(a, b)[1]
-    out_shape, _, _, out = _answer(a, b, method, max_distance, False, pose_b=pose_b)
+    a, b, pose_b, swap, _ = _poses(a, b, pose_b)
+    names = ("b", "a") if swap else ("a", "b")
+    out_shape, _, _, out = _answer(a, b, method, max_distance, False, names, pose_b)
     signed = np.asarray(out["signed"], np.float64)
     with np.errstate(invalid="ignore"):
         d = np.maximum(signed, 0.0) + 0.0
@@ -511,7 +606,9 @@ def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
 
 def signed_distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """``d - r_a - r_b``: negative where two rounded shapes overlap; see :func:`proximity.signed_distance`."""
-    out_shape, _, _, out = _answer(a, b, method, max_distance, False, pose_b=pose_b)
+    a, b, pose_b, swap, _ = _poses(a, b, pose_b)
+    names = ("b", "a") if swap else ("a", "b")
+    out_shape, _, _, out = _answer(a, b, method, max_distance, False, names, pose_b)
     signed = np.asarray(out["signed"], np.float64) + 0.0
     return freeze_result(np.array(signed.reshape(out_shape)))[()]
 
