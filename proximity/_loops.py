@@ -11,7 +11,11 @@ for; anything else is copied to contiguous memory first.
 """
 
 import numpy as np
+from llvmlite import ir
 from numba.core import types
+from numba.core.errors import RequireLiteralValue
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
 from numpy.lib.stride_tricks import as_strided
 
 from ._jit import inline
@@ -110,6 +114,64 @@ def single_shape(view):
 # which the compiler turns into straight strided loads and stores: slice
 # assignments and per-element wrap-around tests cost more than the queries.
 BLOCK = 128
+
+
+# Two pieces of Numba's array model below the public API (``make_array``,
+# ``populate_array``: the array structure's fields), which every Numba
+# release since 0.49 has kept.  A block runs once per 128 queries, so what
+# it costs besides its queries counts: ``np.empty`` for its scratch (a call
+# to the allocator and back, and an atomic reference count) took a third of
+# a million distances to one disk, and every view of an argument (a slice, a
+# reshape) two more atomic operations on a count that all threads share.
+
+
+@intrinsic
+def scratch(typingctx, rows):
+    """A block's scratch: ``rows`` (a constant) rows of :data:`BLOCK`
+    float64, in C order, uninitialised, on the stack of the function it is
+    compiled into.
+
+    It holds no reference (no views of it outlive the block) and is not
+    zero-filled, as Numba fills its own stack slots.
+    """
+    if not isinstance(rows, types.IntegerLiteral):
+        raise RequireLiteralValue(rows)
+    n = rows.literal_value
+    array = types.Array(types.float64, 2, "C")
+
+    def codegen(context, builder, signature, args):
+        f64 = context.get_value_type(types.float64)
+        intp = context.get_value_type(types.intp)
+        with builder.goto_entry_block():
+            data = builder.alloca(ir.ArrayType(f64, n * BLOCK))
+        data.align = 64  # whole cache lines, for the SIMD loads and stores
+        out = make_array(array)(context, builder)
+        populate_array(
+            out,
+            data=builder.bitcast(data, f64.as_pointer()),
+            shape=(ir.Constant(intp, n), ir.Constant(intp, BLOCK)),
+            strides=(ir.Constant(intp, 8 * BLOCK), ir.Constant(intp, 8)),
+            itemsize=ir.Constant(intp, 8),
+            meminfo=None,
+        )
+        return out._getvalue()
+
+    return array(rows), codegen
+
+
+@intrinsic
+def borrowed(typingctx, a):
+    """``a`` without its reference count: slices and reshapes of it cost no
+    atomic operations.  Only for an argument of the block (which outlives
+    every view of it)."""
+
+    def codegen(context, builder, signature, args):
+        view = make_array(a)(context, builder, value=args[0])
+        view.meminfo = view.meminfo.type(None)
+        return view._getvalue()
+
+    return a(a), codegen
+
 
 # The rows of a block's scratch, by name.  Each query is one column.
 #: Pairs of triangles and points: the vertices V0, V1, V2 (nine rows) and
@@ -243,6 +305,37 @@ def gather_round(z, C, U, P, R, n_j, k0, nb):
 
 
 @inline
+def block_points(z, first, P, n_j, k0, nb):
+    """The points of queries ``k0 .. k0 + nb`` as one run ``x0, y0, z0, x1,
+    ...`` of :data:`BLOCK` points, for the block functions of a single shape.
+
+    A full block whose points lie in one row of the loop, contiguous, is
+    read where it lies, with vector loads and shuffles; any other is first
+    copied into rows ``first .. first + 2`` of ``z`` (zeros past ``nb``).
+    """
+    i = k0 // n_j
+    j = k0 - i * n_j
+    rows = borrowed(P)[i, j : j + BLOCK]
+    if nb == BLOCK and rows.shape[0] == BLOCK and rows.strides[0] == 24 and rows.strides[1] == 8:
+        return np.ascontiguousarray(rows).reshape(3 * BLOCK)
+    run = z[first : first + 3].reshape(3 * BLOCK)
+    q = 0
+    while q < nb:
+        n = min(nb - q, n_j - j)
+        Pi = borrowed(P)[i]
+        for t in range(n):
+            run[3 * (q + t)] = Pi[j + t, 0]
+            run[3 * (q + t) + 1] = Pi[j + t, 1]
+            run[3 * (q + t) + 2] = Pi[j + t, 2]
+        q += n
+        i += 1
+        j = 0
+    for e in range(3 * nb, 3 * BLOCK):
+        run[e] = 0.0
+    return run
+
+
+@inline
 def store(z, first, q, res):
     """Column ``q`` of rows ``first .. first + 8`` of ``z``: one query's nine results."""
     z[first, q], z[first + 1, q], z[first + 2, q] = res[0], res[1], res[2]
@@ -261,13 +354,15 @@ def scatter_common(z, first, k0, nb, out, full):
         d[q] = z[first, q]
     if full:
         s = sqr[k0 : k0 + nb]
-        p = point[k0 : k0 + nb]
+        # The points as one run x0, y0, z0, x1, ...: a constant stride, which
+        # the compiler writes with vector shuffles and stores.
+        p = borrowed(point)[k0 : k0 + nb].reshape(3 * nb)
         f = feature[k0 : k0 + nb]
         for q in range(nb):
             s[q] = z[first + 1, q]
-            p[q, 0] = z[first + 2, q]
-            p[q, 1] = z[first + 3, q]
-            p[q, 2] = z[first + 4, q]
+            p[3 * q] = z[first + 2, q]
+            p[3 * q + 1] = z[first + 3, q]
+            p[3 * q + 2] = z[first + 4, q]
             f[q] = np.int8(z[first + 5, q])
 
 

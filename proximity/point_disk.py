@@ -32,17 +32,18 @@ from ._loops import (
     ROUND_OK,
     ROUND_OUT,
     ROUND_ROWS,
-    gather_points,
+    block_points,
     gather_round,
-    point_at,
     round_at,
     scatter_round,
+    scratch,
     single_entry,
     store,
 )
 from .features import Feature
 from .methods import CERTIFIED
 from .point_circle import (
+    Q_MIN,
     circle,
     decompose,
     decompose_local,
@@ -50,7 +51,6 @@ from .point_circle import (
     rim_direction,
     seed_circle,
     seed_projection,
-    short_radial,
     window,
 )
 from .primitives import CIRCLE, DISK
@@ -281,20 +281,57 @@ def exact_row(row, args, point):
 
 
 @inline
-def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
+def _robust_row(is_disk, axis, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """One query of the compiled loops' robust path, without branches:
     its nine results, and whether they hold: in the safe window, with a
-    radial part whose length has all its bits (else the scalar path measures
-    it again)."""
+    radial part of at least :data:`~.point_circle.Q_MIN`, and, unless
+    ``axis``, off the axis.  The others are done again on the scalar path,
+    which measures a shorter radial part again off the axis and gives the
+    same bits elsewhere.
+
+    A loop that keeps the distance alone compiles without the test of the
+    axis (a square root) and the rim point (three divisions); without
+    ``axis``, a loop over many shapes compiles without the rim direction on
+    the axis, which depends on the shape's normal (a square root and three
+    more divisions per query).
+    """
     dx, dy, dz = px - cx, py - cy, pz - cz
     _, ok = window(dx, dy, dz, radius)
     h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-    ok = ok & (not short_radial(qq, on_axis))
+    ok = ok & (qq >= Q_MIN)
+    if not axis:
+        ok = ok & (not on_axis)
+        on_axis = False
     res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     if not is_disk:
         res = (d, s, x, y, z, RIM, on_axis, h, qq)
     return res, ok
+
+
+@inline
+def _keep(z, first, q, res, ok, full):
+    """Query ``q``'s results into rows ``first ..`` of ``z`` (the distance
+    alone unless ``full``) and whether they hold into the row after them;
+    1 where they do not."""
+    if full:
+        store(z, first, q, res)
+    else:
+        z[first, q] = res[0]
+    z[first + 9, q] = ok
+    return not ok
+
+
+@inline
+def _pairs_loop(z, is_disk, full):
+    """The SIMD loop of :func:`_block` over the gathered queries; returns
+    how many it left to the scalar path."""
+    left = 0
+    for q in range(BLOCK):
+        cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
+        res, ok = _robust_row(is_disk, not full, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        left += _keep(z, ROUND_OUT, q, res, ok, full)
+    return left
 
 
 def _block(shape, P, n_j, k0, nb, out, exact, full):
@@ -307,29 +344,46 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
     the other methods.  Then scattered to the outputs.
     """
     is_disk, C, U, N, R = shape
-    z = np.empty((ROUND_ROWS, BLOCK))
+    z = scratch(ROUND_ROWS)
     gather_round(z, C, U, P, R, n_j, k0, nb)
+    left = nb
     if SIMD:
-        for q in range(BLOCK):
-            cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
-            res, ok = _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ROUND_OUT, q, res)
-            z[ROUND_OK, q] = ok
+        # A loop per kind of output, so that the distance alone compiles
+        # without the closest point's terms.
+        if full:
+            left = _pairs_loop(z, is_disk, True)
+        else:
+            left = _pairs_loop(z, is_disk, False)
     else:
         for q in range(nb):
             z[ROUND_OK, q] = 0.0
-    for q in range(nb):
-        if z[ROUND_OK, q] != 0.0:
-            continue
-        k = k0 + q
-        i = k // n_j
-        j = k - i * n_j
-        cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
-        cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, N[i, j, 0], N[i, j, 1], N[i, j, 2], radius, px, py, pz)
-        if EXACT_FALLBACK:
-            exact[k] = cert[0] != certified.CERTAIN
-        store(z, ROUND_OUT, q, cert[1:])
+    if left:
+        for q in range(nb):
+            if z[ROUND_OK, q] != 0.0:
+                continue
+            k = k0 + q
+            i = k // n_j
+            j = k - i * n_j
+            cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
+            nx, ny, nz = N[i, j, 0], N[i, j, 1], N[i, j, 2]
+            cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
+            if EXACT_FALLBACK:
+                exact[k] = cert[0] != certified.CERTAIN
+            store(z, ROUND_OUT, q, cert[1:])
     scatter_round(z, ROUND_OUT, k0, nb, out, full)
+
+
+@inline
+def _one_loop(z, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
+    """The SIMD loop of :func:`_robust_block_one` over the points ``p``
+    (``x0, y0, z0, x1, ...``); returns how many queries it left to the
+    scalar path."""
+    left = 0
+    for q in range(BLOCK):
+        px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+        res, ok = _robust_row(is_disk, True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        left += _keep(z, ONE_OUT, q, res, ok, full)
+    return left
 
 
 @part
@@ -337,35 +391,32 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
-    Only the points are gathered (the rows of ``ONE_*``).  The loop reads
-    the shape as scalars, so the compiler computes its own terms (such as
-    the rim direction used on the axis) once per block instead of once per
-    query.
+    Only the points are read, where they lie when they can be (see
+    :func:`~proximity._loops.block_points`).  The loop reads the shape as
+    scalars, so the compiler computes its own terms (such as the rim
+    direction used on the axis) once per block instead of once per query.
     """
     is_disk, C, U, _, R = shape
-    z = np.empty((ONE_ROWS, BLOCK))
-    gather_points(z, ONE_P, P, n_j, k0, nb)
+    z = scratch(ONE_ROWS)
+    p = block_points(z, ONE_P, P, n_j, k0, nb)
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
-    # One loop for each kind, so that each compiles to the work of its kind only.
-    if is_disk:
-        for q in range(BLOCK):
-            px, py, pz = point_at(z, ONE_P, q)
-            res, ok = _robust_row(True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res)
-            z[ONE_OK, q] = ok
+    # One loop for the distance alone (the kinds differ there by a select),
+    # and one for each kind's full answer, so that each compiles to the work
+    # it keeps only.
+    if not full:
+        left = _one_loop(z, p, is_disk, False, cx, cy, cz, ux, uy, uz, radius)
+    elif is_disk:
+        left = _one_loop(z, p, True, True, cx, cy, cz, ux, uy, uz, radius)
     else:
-        for q in range(BLOCK):
-            px, py, pz = point_at(z, ONE_P, q)
-            res, ok = _robust_row(False, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res)
-            z[ONE_OK, q] = ok
-    for q in range(nb):
-        if z[ONE_OK, q] == 0.0:
-            px, py, pz = point_at(z, ONE_P, q)
-            # The robust method reads the unit normal only; it stands in for the normal as given.
-            res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res[1:])
+        left = _one_loop(z, p, False, True, cx, cy, cz, ux, uy, uz, radius)
+    if left:
+        for q in range(nb):
+            if z[ONE_OK, q] == 0.0:
+                px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+                # The robust method reads the unit normal only; it stands in for the normal as given.
+                res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
+                store(z, ONE_OUT, q, res[1:])
     scatter_round(z, ONE_OUT, k0, nb, out, full)
 
 
