@@ -180,9 +180,14 @@ PAIR_V, PAIR_P, PAIR_OUT, PAIR_OK, PAIR_ROWS = 0, 9, 12, 21, 22
 #: Many points against one shape, read as scalars: the point, the nine
 #: results, a flag.
 ONE_P, ONE_OUT, ONE_OK, ONE_ROWS = 0, 3, 12, 13
-#: Disks and circles: center, unit normal, point, radius, the nine results,
-#: a flag.
-ROUND_C, ROUND_U, ROUND_P, ROUND_R, ROUND_OUT, ROUND_OK, ROUND_ROWS = 0, 3, 6, 9, 10, 19, 20
+#: Disks and circles read their inputs in place where they can, and copy
+#: the others (see :func:`block_vectors`) into a scratch of their own:
+#: center, unit normal and point (three rows each, ``x0, y0, z0, x1,
+#: ...``), radius.  Their results go to another (:data:`RESULT_OK`), so
+#: that the compiler knows that the loop's stores leave its loads alone.
+ROUND_C, ROUND_U, ROUND_P, ROUND_R, ROUND_ROWS = 0, 3, 6, 9, 10
+#: A scratch of results: the nine results (rows 0 to 8), then a flag.
+RESULT_OK, RESULT_ROWS = 9, 10
 
 
 @inline
@@ -200,18 +205,6 @@ def triangle_at(z, q):
 def point_at(z, first, q):
     """The point of query ``q`` from rows ``first .. first + 2``."""
     return z[first, q], z[first + 1, q], z[first + 2, q]
-
-
-@inline
-def round_at(z, q):
-    """Query ``q`` of a block of disks or circles, in the order of the
-    queries' arguments: ``(cx, cy, cz, ux, uy, uz, radius, px, py, pz)``."""
-    return (
-        z[ROUND_C, q], z[ROUND_C + 1, q], z[ROUND_C + 2, q],
-        z[ROUND_U, q], z[ROUND_U + 1, q], z[ROUND_U + 2, q],
-        z[ROUND_R, q],
-        z[ROUND_P, q], z[ROUND_P + 1, q], z[ROUND_P + 2, q],
-    )  # fmt: skip
 
 
 @inline
@@ -274,63 +267,59 @@ def gather_points(z, first, P, n_j, k0, nb):
 
 
 @inline
-def gather_round(z, C, U, P, R, n_j, k0, nb):
-    """Rows :data:`ROUND_C` to :data:`ROUND_R` of ``z``: center, unit
-    normal, point and radius of queries ``k0 .. k0 + nb``, as
-    :func:`gather_triangles`."""
-    i = k0 // n_j
-    j = k0 - i * n_j
-    q = 0
-    while q < nb:
-        run = min(nb - q, n_j - j)
-        Ci = C[i]
-        Ui = U[i]
-        Pi = P[i]
-        Ri = R[i]
-        for t in range(run):
-            z[ROUND_C, q + t] = Ci[j + t, 0]
-            z[ROUND_C + 1, q + t] = Ci[j + t, 1]
-            z[ROUND_C + 2, q + t] = Ci[j + t, 2]
-            z[ROUND_U, q + t] = Ui[j + t, 0]
-            z[ROUND_U + 1, q + t] = Ui[j + t, 1]
-            z[ROUND_U + 2, q + t] = Ui[j + t, 2]
-            z[ROUND_P, q + t] = Pi[j + t, 0]
-            z[ROUND_P + 1, q + t] = Pi[j + t, 1]
-            z[ROUND_P + 2, q + t] = Pi[j + t, 2]
-            z[ROUND_R, q + t] = Ri[j + t]
-        q += run
-        i += 1
-        j = 0
-    _zero_tail(z, ROUND_C, ROUND_R + 1, nb)
+def block_vectors(z, first, V, n_j, k0, nb):
+    """The vectors of ``V`` ``(I, J, 3)`` at queries ``k0 .. k0 + nb`` as one
+    run ``x0, y0, z0, x1, ...`` of :data:`BLOCK` vectors, for loops that
+    read them in place.
 
-
-@inline
-def block_points(z, first, P, n_j, k0, nb):
-    """The points of queries ``k0 .. k0 + nb`` as one run ``x0, y0, z0, x1,
-    ...`` of :data:`BLOCK` points, for the block functions of a single shape.
-
-    A full block whose points lie in one row of the loop, contiguous, is
-    read where it lies, with vector loads and shuffles; any other is first
+    A full block whose vectors lie in one row of the loop, contiguous, is
+    read where it lies: the loop's loads are then vector loads and
+    shuffles, which the processor overlaps with the arithmetic.  Any other
+    (a broadcast, a stride, a block across rows or the last one) is first
     copied into rows ``first .. first + 2`` of ``z`` (zeros past ``nb``).
     """
     i = k0 // n_j
     j = k0 - i * n_j
-    rows = borrowed(P)[i, j : j + BLOCK]
+    rows = borrowed(V)[i, j : j + BLOCK]
     if nb == BLOCK and rows.shape[0] == BLOCK and rows.strides[0] == 24 and rows.strides[1] == 8:
         return np.ascontiguousarray(rows).reshape(3 * BLOCK)
     run = z[first : first + 3].reshape(3 * BLOCK)
     q = 0
     while q < nb:
         n = min(nb - q, n_j - j)
-        Pi = borrowed(P)[i]
+        Vi = borrowed(V)[i]
         for t in range(n):
-            run[3 * (q + t)] = Pi[j + t, 0]
-            run[3 * (q + t) + 1] = Pi[j + t, 1]
-            run[3 * (q + t) + 2] = Pi[j + t, 2]
+            run[3 * (q + t)] = Vi[j + t, 0]
+            run[3 * (q + t) + 1] = Vi[j + t, 1]
+            run[3 * (q + t) + 2] = Vi[j + t, 2]
         q += n
         i += 1
         j = 0
     for e in range(3 * nb, 3 * BLOCK):
+        run[e] = 0.0
+    return run
+
+
+@inline
+def block_scalars(z, row, S, n_j, k0, nb):
+    """:func:`block_vectors` for the scalars of ``S`` ``(I, J)``, copied
+    into row ``row`` of ``z`` where they are not contiguous."""
+    i = k0 // n_j
+    j = k0 - i * n_j
+    items = borrowed(S)[i, j : j + BLOCK]
+    if nb == BLOCK and items.shape[0] == BLOCK and items.strides[0] == 8:
+        return np.ascontiguousarray(items)
+    run = z[row]
+    q = 0
+    while q < nb:
+        n = min(nb - q, n_j - j)
+        Si = borrowed(S)[i]
+        for t in range(n):
+            run[q + t] = Si[j + t]
+        q += n
+        i += 1
+        j = 0
+    for e in range(nb, BLOCK):
         run[e] = 0.0
     return run
 
@@ -349,15 +338,15 @@ def scatter_common(z, first, k0, nb, out, full):
     feature of queries ``k0 .. k0 + nb`` from rows ``first .. first + 5``,
     into the first four fields of the outputs record ``out``."""
     dist, sqr, point, feature = out[0], out[1], out[2], out[3]
-    d = dist[k0 : k0 + nb]
+    d = borrowed(dist)[k0 : k0 + nb]
     for q in range(nb):
         d[q] = z[first, q]
     if full:
-        s = sqr[k0 : k0 + nb]
+        s = borrowed(sqr)[k0 : k0 + nb]
         # The points as one run x0, y0, z0, x1, ...: a constant stride, which
         # the compiler writes with vector shuffles and stores.
         p = borrowed(point)[k0 : k0 + nb].reshape(3 * nb)
-        f = feature[k0 : k0 + nb]
+        f = borrowed(feature)[k0 : k0 + nb]
         for q in range(nb):
             s[q] = z[first + 1, q]
             p[3 * q] = z[first + 2, q]
@@ -384,9 +373,9 @@ def scatter_round(z, first, k0, nb, out, full):
     from rows ``first + 6 ..``."""
     scatter_common(z, first, k0, nb, out, full)
     if full:
-        e = out[4][k0 : k0 + nb]
-        h = out[5][k0 : k0 + nb]
-        r = out[6][k0 : k0 + nb]
+        e = borrowed(out[4])[k0 : k0 + nb]
+        h = borrowed(out[5])[k0 : k0 + nb]
+        r = borrowed(out[6])[k0 : k0 + nb]
         for q in range(nb):
             e[q] = z[first + 6, q] != 0.0
             h[q] = z[first + 7, q]

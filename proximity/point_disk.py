@@ -25,16 +25,15 @@ from ._fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
 from ._jit import inline, kernel, part, specialize
 from ._loops import (
     BLOCK,
-    ONE_OK,
-    ONE_OUT,
-    ONE_P,
-    ONE_ROWS,
-    ROUND_OK,
-    ROUND_OUT,
+    RESULT_OK,
+    RESULT_ROWS,
+    ROUND_C,
+    ROUND_P,
+    ROUND_R,
     ROUND_ROWS,
-    block_points,
-    gather_round,
-    round_at,
+    ROUND_U,
+    block_scalars,
+    block_vectors,
     scatter_round,
     scratch,
     single_entry,
@@ -310,67 +309,79 @@ def _robust_row(is_disk, axis, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def _keep(z, first, q, res, ok, full):
-    """Query ``q``'s results into rows ``first ..`` of ``z`` (the distance
-    alone unless ``full``) and whether they hold into the row after them;
-    1 where they do not."""
+def _keep(z, q, res, ok, full):
+    """Query ``q``'s results into a scratch of results ``z`` (the distance
+    alone unless ``full``), with whether they hold; 1 where they do not."""
     if full:
-        store(z, first, q, res)
+        store(z, 0, q, res)
     else:
-        z[first, q] = res[0]
-    z[first + 9, q] = ok
+        z[0, q] = res[0]
+    z[RESULT_OK, q] = ok
     return not ok
 
 
 @inline
-def _pairs_loop(z, is_disk, full):
-    """The SIMD loop of :func:`_block` over the gathered queries; returns
-    how many it left to the scalar path."""
+def _pairs_loop(z, c, u, p, r, is_disk, full):
+    """The SIMD loop of :func:`_block` over the runs of centers ``c``, unit
+    normals ``u``, points ``p`` (``x0, y0, z0, x1, ...``) and radii ``r``;
+    returns how many queries it left to the scalar path.
+
+    Queries on the axis are left to the scalar path when the closest point
+    is kept: the rim direction there is fixed by each shape's normal.
+    """
     left = 0
     for q in range(BLOCK):
-        cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
-        res, ok = _robust_row(is_disk, not full, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        left += _keep(z, ROUND_OUT, q, res, ok, full)
+        cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
+        px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+        res, ok = _robust_row(is_disk, not full, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
+        left += _keep(z, q, res, ok, full)
     return left
 
 
 def _block(shape, P, n_j, k0, nb, out, exact, full):
     """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
 
-    Gathered into local scratch (the rows of ``ROUND_*``); for ``robust``,
-    computed by a loop that compiles to SIMD code (with, in row
-    ``ROUND_OK``, whether the query was in its safe window); every other
-    query is done one by one on the scalar path, which is the only path of
-    the other methods.  Then scattered to the outputs.
+    The shapes' arrays and the points are read in place where they can be
+    (see :func:`~proximity._loops.block_vectors`); for ``robust``, computed
+    by a loop that compiles to SIMD code (with, in row ``RESULT_OK``,
+    whether its answer holds); every other query is done one by one on the
+    scalar path, which is the only path of the other methods.  Then
+    scattered to the outputs.
     """
     is_disk, C, U, N, R = shape
-    z = scratch(ROUND_ROWS)
-    gather_round(z, C, U, P, R, n_j, k0, nb)
+    copies = scratch(ROUND_ROWS)
+    c = block_vectors(copies, ROUND_C, C, n_j, k0, nb)
+    u = block_vectors(copies, ROUND_U, U, n_j, k0, nb)
+    p = block_vectors(copies, ROUND_P, P, n_j, k0, nb)
+    r = block_scalars(copies, ROUND_R, R, n_j, k0, nb)
+    z = scratch(RESULT_ROWS)
     left = nb
     if SIMD:
         # A loop per kind of output, so that the distance alone compiles
         # without the closest point's terms.
         if full:
-            left = _pairs_loop(z, is_disk, True)
+            left = _pairs_loop(z, c, u, p, r, is_disk, True)
         else:
-            left = _pairs_loop(z, is_disk, False)
+            left = _pairs_loop(z, c, u, p, r, is_disk, False)
     else:
         for q in range(nb):
-            z[ROUND_OK, q] = 0.0
+            z[RESULT_OK, q] = 0.0
     if left:
         for q in range(nb):
-            if z[ROUND_OK, q] != 0.0:
+            if z[RESULT_OK, q] != 0.0:
                 continue
             k = k0 + q
             i = k // n_j
             j = k - i * n_j
-            cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
+            cx, cy, cz = c[3 * q], c[3 * q + 1], c[3 * q + 2]
+            ux, uy, uz = u[3 * q], u[3 * q + 1], u[3 * q + 2]
+            px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
             nx, ny, nz = N[i, j, 0], N[i, j, 1], N[i, j, 2]
-            cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
+            cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, r[q], px, py, pz)
             if EXACT_FALLBACK:
                 exact[k] = cert[0] != certified.CERTAIN
-            store(z, ROUND_OUT, q, cert[1:])
-    scatter_round(z, ROUND_OUT, k0, nb, out, full)
+            store(z, 0, q, cert[1:])
+    scatter_round(z, 0, k0, nb, out, full)
 
 
 @inline
@@ -382,7 +393,7 @@ def _one_loop(z, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
     for q in range(BLOCK):
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        left += _keep(z, ONE_OUT, q, res, ok, full)
+        left += _keep(z, q, res, ok, full)
     return left
 
 
@@ -391,14 +402,15 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
-    Only the points are read, where they lie when they can be (see
-    :func:`~proximity._loops.block_points`).  The loop reads the shape as
-    scalars, so the compiler computes its own terms (such as the rim
-    direction used on the axis) once per block instead of once per query.
+    Only the points are read, in place where they can be.  The loop reads
+    the shape as scalars, so the compiler computes its own terms (such as
+    the rim direction used on the axis) once per block instead of once per
+    query.
     """
     is_disk, C, U, _, R = shape
-    z = scratch(ONE_ROWS)
-    p = block_points(z, ONE_P, P, n_j, k0, nb)
+    copies = scratch(3)
+    p = block_vectors(copies, 0, P, n_j, k0, nb)
+    z = scratch(RESULT_ROWS)
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
     # One loop for the distance alone (the kinds differ there by a select),
@@ -412,12 +424,12 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
         left = _one_loop(z, p, False, True, cx, cy, cz, ux, uy, uz, radius)
     if left:
         for q in range(nb):
-            if z[ONE_OK, q] == 0.0:
+            if z[RESULT_OK, q] == 0.0:
                 px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
                 # The robust method reads the unit normal only; it stands in for the normal as given.
                 res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
-                store(z, ONE_OUT, q, res[1:])
-    scatter_round(z, ONE_OUT, k0, nb, out, full)
+                store(z, 0, q, res[1:])
+    scatter_round(z, 0, k0, nb, out, full)
 
 
 # Per method: the query of one point, whether it has a SIMD loop (robust),
