@@ -12,7 +12,7 @@ for; anything else is copied to contiguous memory first.
 
 import numpy as np
 from llvmlite import ir
-from numba.core import types
+from numba.core import cgutils, types
 from numba.core.errors import RequireLiteralValue
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
@@ -126,44 +126,45 @@ BLOCK = 128
 
 
 @intrinsic
-def scratch(typingctx, rows):
-    """A block's scratch: ``rows`` (a constant) rows of :data:`BLOCK`
-    float64, in C order, uninitialised, on the stack of the function it is
-    compiled into.
+def scratch(typingctx, rows, dtype):
+    """A block's scratch: ``rows`` (a constant) rows of :data:`BLOCK` items
+    of ``dtype`` (a NumPy scalar type), in C order, uninitialised, on the
+    stack of the function it is compiled into.
 
-    It holds no reference (no views of it outlive the block) and is not
+    It holds no reference (no view of it outlives the block) and is not
     zero-filled, as Numba fills its own stack slots.
     """
     if not isinstance(rows, types.IntegerLiteral):
         raise RequireLiteralValue(rows)
     n = rows.literal_value
-    array = types.Array(types.float64, 2, "C")
+    array = types.Array(dtype.instance_type, 2, "C")
 
     def codegen(context, builder, signature, args):
-        f64 = context.get_value_type(types.float64)
+        item = context.get_data_type(array.dtype)
+        size = context.get_abi_sizeof(item)
         intp = context.get_value_type(types.intp)
         with builder.goto_entry_block():
-            data = builder.alloca(ir.ArrayType(f64, n * BLOCK))
+            data = builder.alloca(ir.ArrayType(item, n * BLOCK))
         data.align = 64  # whole cache lines, for the SIMD loads and stores
         out = make_array(array)(context, builder)
         populate_array(
             out,
-            data=builder.bitcast(data, f64.as_pointer()),
+            data=builder.bitcast(data, item.as_pointer()),
             shape=(ir.Constant(intp, n), ir.Constant(intp, BLOCK)),
-            strides=(ir.Constant(intp, 8 * BLOCK), ir.Constant(intp, 8)),
-            itemsize=ir.Constant(intp, 8),
+            strides=(ir.Constant(intp, size * BLOCK), ir.Constant(intp, size)),
+            itemsize=ir.Constant(intp, size),
             meminfo=None,
         )
         return out._getvalue()
 
-    return array(rows), codegen
+    return array(rows, dtype), codegen
 
 
 @intrinsic
 def borrowed(typingctx, a):
-    """``a`` without its reference count: slices and reshapes of it cost no
-    atomic operations.  Only for an argument of the block (which outlives
-    every view of it)."""
+    """``a`` without its reference count: slices of it cost no atomic
+    operations.  Only for an argument of the block (which outlives every
+    view of it)."""
 
     def codegen(context, builder, signature, args):
         view = make_array(a)(context, builder, value=args[0])
@@ -171,6 +172,34 @@ def borrowed(typingctx, a):
         return view._getvalue()
 
     return a(a), codegen
+
+
+@intrinsic
+def flat(typingctx, a):
+    """The items of ``a`` as one 1-D C array, without its reference count:
+    only for an array whose items the caller knows to be contiguous, in C
+    order (a C array, or one whose strides it checked), and for reading
+    where ``a`` is read-only.
+
+    ``reshape`` and ``np.ascontiguousarray`` do this with a call to a
+    helper of Numba's, and any call in a block keeps its arguments'
+    reference counts (atomic operations on counts the threads share), which
+    Numba removes where it sees the whole function.
+    """
+    array = types.Array(a.dtype, 1, "C")
+
+    def codegen(context, builder, signature, args):
+        src = make_array(a)(context, builder, value=args[0])
+        intp = context.get_value_type(types.intp)
+        count = ir.Constant(intp, 1)
+        for extent in cgutils.unpack_tuple(builder, src.shape):
+            count = builder.mul(count, extent)
+        out = make_array(array)(context, builder)
+        size = src.itemsize
+        populate_array(out, data=src.data, shape=(count,), strides=(size,), itemsize=size, meminfo=None)
+        return out._getvalue()
+
+    return array(a), codegen
 
 
 # The rows of a block's scratch, by name.  Each query is one column.
@@ -181,13 +210,11 @@ PAIR_V, PAIR_P, PAIR_OUT, PAIR_OK, PAIR_ROWS = 0, 9, 12, 21, 22
 #: results, a flag.
 ONE_P, ONE_OUT, ONE_OK, ONE_ROWS = 0, 3, 12, 13
 #: Disks and circles read their inputs in place where they can, and copy
-#: the others (see :func:`block_vectors`) into a scratch of their own:
+#: the others (see :func:`block_vectors`) into a scratch of these rows:
 #: center, unit normal and point (three rows each, ``x0, y0, z0, x1,
-#: ...``), radius.  Their results go to another (:data:`RESULT_OK`), so
-#: that the compiler knows that the loop's stores leave its loads alone.
+#: ...``), radius.  They write their results in place too
+#: (:func:`round_sinks`).
 ROUND_C, ROUND_U, ROUND_P, ROUND_R, ROUND_ROWS = 0, 3, 6, 9, 10
-#: A scratch of results: the nine results (rows 0 to 8), then a flag.
-RESULT_OK, RESULT_ROWS = 9, 10
 
 
 @inline
@@ -282,8 +309,8 @@ def block_vectors(z, first, V, n_j, k0, nb):
     j = k0 - i * n_j
     rows = borrowed(V)[i, j : j + BLOCK]
     if nb == BLOCK and rows.shape[0] == BLOCK and rows.strides[0] == 24 and rows.strides[1] == 8:
-        return np.ascontiguousarray(rows).reshape(3 * BLOCK)
-    run = z[first : first + 3].reshape(3 * BLOCK)
+        return flat(rows)
+    run = flat(z[first : first + 3])
     q = 0
     while q < nb:
         n = min(nb - q, n_j - j)
@@ -308,8 +335,8 @@ def block_scalars(z, row, S, n_j, k0, nb):
     j = k0 - i * n_j
     items = borrowed(S)[i, j : j + BLOCK]
     if nb == BLOCK and items.shape[0] == BLOCK and items.strides[0] == 8:
-        return np.ascontiguousarray(items)
-    run = z[row]
+        return flat(items)
+    run = flat(z[row])
     q = 0
     while q < nb:
         n = min(nb - q, n_j - j)
@@ -345,7 +372,7 @@ def scatter_common(z, first, k0, nb, out, full):
         s = borrowed(sqr)[k0 : k0 + nb]
         # The points as one run x0, y0, z0, x1, ...: a constant stride, which
         # the compiler writes with vector shuffles and stores.
-        p = borrowed(point)[k0 : k0 + nb].reshape(3 * nb)
+        p = flat(point[k0 : k0 + nb])
         f = borrowed(feature)[k0 : k0 + nb]
         for q in range(nb):
             s[q] = z[first + 1, q]
@@ -368,15 +395,74 @@ def scatter_triangles(z, first, k0, nb, out, full):
 
 
 @inline
-def scatter_round(z, first, k0, nb, out, full):
-    """:func:`scatter_common`, and equidistant, height and radial (``out[4:7]``)
-    from rows ``first + 6 ..``."""
-    scatter_common(z, first, k0, nb, out, full)
+def round_sinks(out, k0, nb, full, spare, codes, flags):
+    """Where a block of disk or circle queries ``k0 .. k0 + nb`` writes its
+    results: ``(distance, sqr_distance, point, feature, equidistant, height,
+    radial)``, the point as one run ``x0, y0, z0, x1, ...``.
+
+    A full block of closest points writes them in place, in the SIMD loop,
+    so that its stores stream out among its loads and arithmetic: through
+    scratch and a scatter after it, the stores of a million closest points
+    took twice as long as a loop that only writes them.  Distances alone go
+    to the scratch ``spare`` (float64, seven rows), which
+    :func:`drain_round` copies out (in place, a million took a fifth
+    longer); so do all the results of the last, shorter block, to
+    ``spare``, ``codes`` (int8) and ``flags`` (bool).  Outputs that a query
+    does not fill have no rows: their sinks are empty.
+    """
+    if full and nb == BLOCK:
+        return (
+            borrowed(out[0])[k0 : k0 + BLOCK],
+            borrowed(out[1])[k0 : k0 + BLOCK],
+            flat(borrowed(out[2])[k0 : k0 + BLOCK]),
+            borrowed(out[3])[k0 : k0 + BLOCK],
+            borrowed(out[4])[k0 : k0 + BLOCK],
+            borrowed(out[5])[k0 : k0 + BLOCK],
+            borrowed(out[6])[k0 : k0 + BLOCK],
+        )
+    if not full:
+        unused = (borrowed(out[1]), spare[0, :0], borrowed(out[3]), borrowed(out[4]), borrowed(out[5]))
+        return (spare[0], *unused, borrowed(out[6]))
+    return spare[0], spare[1], flat(spare[2:5]), codes[0], flags[0], spare[5], spare[6]
+
+
+@inline
+def put_round(sinks, q, res, full):
+    """Query ``q``'s results ``res`` (as :func:`store` takes them) into
+    ``sinks`` (see :func:`round_sinks`): the distance alone unless ``full``."""
+    d, s, p, f, e, h, r = sinks
+    d[q] = res[0]
     if full:
-        e = borrowed(out[4])[k0 : k0 + nb]
-        h = borrowed(out[5])[k0 : k0 + nb]
-        r = borrowed(out[6])[k0 : k0 + nb]
+        s[q] = res[1]
+        p[3 * q], p[3 * q + 1], p[3 * q + 2] = res[2], res[3], res[4]
+        f[q] = np.int8(res[5])
+        e[q] = res[6] != 0
+        h[q] = res[7]
+        r[q] = res[8]
+
+
+@inline
+def drain_round(sinks, out, k0, nb, full):
+    """Copy the results that :func:`round_sinks` did not put in place to
+    ``out``: the distances alone, or every result of a block shorter than
+    :data:`BLOCK`."""
+    d, s, p, f, e, h, r = sinks
+    if not full or nb < BLOCK:
+        dist = borrowed(out[0])[k0 : k0 + nb]
         for q in range(nb):
-            e[q] = z[first + 6, q] != 0.0
-            h[q] = z[first + 7, q]
-            r[q] = z[first + 8, q]
+            dist[q] = d[q]
+    if full and nb < BLOCK:
+        sqr, feature = borrowed(out[1])[k0 : k0 + nb], borrowed(out[3])[k0 : k0 + nb]
+        point = flat(borrowed(out[2])[k0 : k0 + nb])
+        flag, height, radial = (
+            borrowed(out[4])[k0 : k0 + nb],
+            borrowed(out[5])[k0 : k0 + nb],
+            borrowed(out[6])[k0 : k0 + nb],
+        )
+        for q in range(nb):
+            sqr[q] = s[q]
+            point[3 * q], point[3 * q + 1], point[3 * q + 2] = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+            feature[q] = f[q]
+            flag[q] = e[q]
+            height[q] = h[q]
+            radial[q] = r[q]

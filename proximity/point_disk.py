@@ -25,8 +25,6 @@ from ._fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
 from ._jit import inline, kernel, part, specialize
 from ._loops import (
     BLOCK,
-    RESULT_OK,
-    RESULT_ROWS,
     ROUND_C,
     ROUND_P,
     ROUND_R,
@@ -34,10 +32,11 @@ from ._loops import (
     ROUND_U,
     block_scalars,
     block_vectors,
-    scatter_round,
+    drain_round,
+    put_round,
+    round_sinks,
     scratch,
     single_entry,
-    store,
 )
 from .features import Feature
 from .methods import CERTIFIED
@@ -309,19 +308,16 @@ def _robust_row(is_disk, axis, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def _keep(z, q, res, ok, full):
-    """Query ``q``'s results into a scratch of results ``z`` (the distance
-    alone unless ``full``), with whether they hold; 1 where they do not."""
-    if full:
-        store(z, 0, q, res)
-    else:
-        z[0, q] = res[0]
-    z[RESULT_OK, q] = ok
+def _keep(sinks, oks, q, res, ok, full):
+    """Query ``q``'s results into ``sinks`` (the distance alone unless
+    ``full``) and whether they hold into ``oks``; 1 where they do not."""
+    put_round(sinks, q, res, full)
+    oks[q] = ok
     return not ok
 
 
 @inline
-def _pairs_loop(z, c, u, p, r, is_disk, full):
+def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full):
     """The SIMD loop of :func:`_block` over the runs of centers ``c``, unit
     normals ``u``, points ``p`` (``x0, y0, z0, x1, ...``) and radii ``r``;
     returns how many queries it left to the scalar path.
@@ -334,7 +330,7 @@ def _pairs_loop(z, c, u, p, r, is_disk, full):
         cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, not full, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
-        left += _keep(z, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full)
     return left
 
 
@@ -342,33 +338,35 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
     """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
 
     The shapes' arrays and the points are read in place where they can be
-    (see :func:`~proximity._loops.block_vectors`); for ``robust``, computed
-    by a loop that compiles to SIMD code (with, in row ``RESULT_OK``,
-    whether its answer holds); every other query is done one by one on the
-    scalar path, which is the only path of the other methods.  Then
-    scattered to the outputs.
+    (see :func:`~proximity._loops.block_vectors`), and the results written
+    in place (:func:`~proximity._loops.round_sinks`).  For ``robust``, a
+    loop that compiles to SIMD code answers every query it can (``oks``
+    says which); every other query is done one by one on the scalar path,
+    which is the only path of the other methods.
     """
     is_disk, C, U, N, R = shape
-    copies = scratch(ROUND_ROWS)
+    copies = scratch(ROUND_ROWS, np.float64)
     c = block_vectors(copies, ROUND_C, C, n_j, k0, nb)
     u = block_vectors(copies, ROUND_U, U, n_j, k0, nb)
     p = block_vectors(copies, ROUND_P, P, n_j, k0, nb)
     r = block_scalars(copies, ROUND_R, R, n_j, k0, nb)
-    z = scratch(RESULT_ROWS)
+    results = scratch(8, np.float64)
+    oks = results[7]
+    sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
     left = nb
     if SIMD:
         # A loop per kind of output, so that the distance alone compiles
         # without the closest point's terms.
         if full:
-            left = _pairs_loop(z, c, u, p, r, is_disk, True)
+            left = _pairs_loop(sinks, oks, c, u, p, r, is_disk, True)
         else:
-            left = _pairs_loop(z, c, u, p, r, is_disk, False)
+            left = _pairs_loop(sinks, oks, c, u, p, r, is_disk, False)
     else:
         for q in range(nb):
-            z[RESULT_OK, q] = 0.0
+            oks[q] = 0.0
     if left:
         for q in range(nb):
-            if z[RESULT_OK, q] != 0.0:
+            if oks[q] != 0.0:
                 continue
             k = k0 + q
             i = k // n_j
@@ -380,12 +378,12 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
             cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, r[q], px, py, pz)
             if EXACT_FALLBACK:
                 exact[k] = cert[0] != certified.CERTAIN
-            store(z, 0, q, cert[1:])
-    scatter_round(z, 0, k0, nb, out, full)
+            put_round(sinks, q, cert[1:], full)
+    drain_round(sinks, out, k0, nb, full)
 
 
 @inline
-def _one_loop(z, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
+def _one_loop(sinks, oks, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
     """The SIMD loop of :func:`_robust_block_one` over the points ``p``
     (``x0, y0, z0, x1, ...``); returns how many queries it left to the
     scalar path."""
@@ -393,7 +391,7 @@ def _one_loop(z, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
     for q in range(BLOCK):
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        left += _keep(z, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full)
     return left
 
 
@@ -402,34 +400,35 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
-    Only the points are read, in place where they can be.  The loop reads
-    the shape as scalars, so the compiler computes its own terms (such as
-    the rim direction used on the axis) once per block instead of once per
-    query.
+    Only the points are read.  The loop reads the shape as scalars, so the
+    compiler computes its own terms (such as the rim direction used on the
+    axis) once per block instead of once per query.
     """
     is_disk, C, U, _, R = shape
-    copies = scratch(3)
+    copies = scratch(3, np.float64)
     p = block_vectors(copies, 0, P, n_j, k0, nb)
-    z = scratch(RESULT_ROWS)
+    results = scratch(8, np.float64)
+    oks = results[7]
+    sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
     # One loop for the distance alone (the kinds differ there by a select),
     # and one for each kind's full answer, so that each compiles to the work
     # it keeps only.
     if not full:
-        left = _one_loop(z, p, is_disk, False, cx, cy, cz, ux, uy, uz, radius)
+        left = _one_loop(sinks, oks, p, is_disk, False, cx, cy, cz, ux, uy, uz, radius)
     elif is_disk:
-        left = _one_loop(z, p, True, True, cx, cy, cz, ux, uy, uz, radius)
+        left = _one_loop(sinks, oks, p, True, True, cx, cy, cz, ux, uy, uz, radius)
     else:
-        left = _one_loop(z, p, False, True, cx, cy, cz, ux, uy, uz, radius)
+        left = _one_loop(sinks, oks, p, False, True, cx, cy, cz, ux, uy, uz, radius)
     if left:
         for q in range(nb):
-            if z[RESULT_OK, q] == 0.0:
+            if oks[q] == 0.0:
                 px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
                 # The robust method reads the unit normal only; it stands in for the normal as given.
                 res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
-                store(z, 0, q, res[1:])
-    scatter_round(z, 0, k0, nb, out, full)
+                put_round(sinks, q, res[1:], full)
+    drain_round(sinks, out, k0, nb, full)
 
 
 # Per method: the query of one point, whether it has a SIMD loop (robust),
