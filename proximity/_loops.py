@@ -186,16 +186,35 @@ def scratch(typingctx, rows, dtype):
     return array(rows, dtype), codegen
 
 
-@intrinsic
-def borrowed(typingctx, a):
-    """``a`` without its reference count: slices of it cost no atomic
-    operations.  Only for an argument of the block (which outlives every
-    view of it)."""
-
-    def codegen(context, builder, signature, args):
-        view = make_array(a)(context, builder, value=args[0])
+def _without_count(context, builder, typ, value):
+    """``value`` of type ``typ`` with the meminfo of every array in it null."""
+    if isinstance(typ, types.Array):
+        view = make_array(typ)(context, builder, value=value)
         view.meminfo = view.meminfo.type(None)
         return view._getvalue()
+    if isinstance(typ, types.BaseTuple):
+        for k, member in enumerate(typ):
+            item = _without_count(context, builder, member, builder.extract_value(value, k))
+            value = builder.insert_value(value, item, k)
+    return value
+
+
+@intrinsic
+def borrowed(typingctx, a):
+    """``a`` (an array, or a record of arrays) without reference counts:
+    views of it cost no atomic operations.  Only for the arguments of a
+    block, which outlive every view of them.
+
+    A block that rebinds its arguments to these on its first line holds no
+    reference at all: Numba counts a reference to each argument array from
+    where the argument is read to its last use, and drops the pair only
+    where it can follow it through the whole function, which a block's
+    scalar path makes too large.  Otherwise each call of a block makes two
+    atomic operations per array on counts that every thread shares.
+    """
+
+    def codegen(context, builder, signature, args):
+        return _without_count(context, builder, a, args[0])
 
     return a(a), codegen
 
@@ -330,17 +349,19 @@ def block_vectors(z, first, V, n_j, k0, nb):
     shuffles, which the processor overlaps with the arithmetic.  Any other
     (a broadcast, a stride, a block across rows or the last one) is first
     copied into rows ``first .. first + 2`` of ``z`` (zeros past ``nb``).
+    ``V`` is :func:`borrowed`, as the block's arguments are, so that the
+    views cost no reference counts.
     """
     i = k0 // n_j
     j = k0 - i * n_j
-    rows = borrowed(V)[i, j : j + BLOCK]
+    rows = V[i, j : j + BLOCK]
     if nb == BLOCK and rows.shape[0] == BLOCK and rows.strides[0] == 24 and rows.strides[1] == 8:
         return flat(rows)
     run = flat(z[first : first + 3])
     q = 0
     while q < nb:
         n = min(nb - q, n_j - j)
-        Vi = borrowed(V)[i]
+        Vi = V[i]
         for t in range(n):
             run[3 * (q + t)] = Vi[j + t, 0]
             run[3 * (q + t) + 1] = Vi[j + t, 1]
@@ -359,14 +380,14 @@ def block_scalars(z, row, S, n_j, k0, nb):
     into row ``row`` of ``z`` where they are not contiguous."""
     i = k0 // n_j
     j = k0 - i * n_j
-    items = borrowed(S)[i, j : j + BLOCK]
+    items = S[i, j : j + BLOCK]
     if nb == BLOCK and items.shape[0] == BLOCK and items.strides[0] == 8:
         return flat(items)
     run = flat(z[row])
     q = 0
     while q < nb:
         n = min(nb - q, n_j - j)
-        Si = borrowed(S)[i]
+        Si = S[i]
         for t in range(n):
             run[q + t] = Si[j + t]
         q += n
@@ -431,24 +452,25 @@ def round_sinks(out, k0, nb, full, spare, codes, flags):
     scratch and a scatter after it, the stores of a million closest points
     took twice as long as a loop that only writes them.  Distances alone go
     to the scratch ``spare`` (float64, seven rows), which
-    :func:`drain_round` copies out (in place, a million took a fifth
-    longer); so do all the results of the last, shorter block, to
-    ``spare``, ``codes`` (int8) and ``flags`` (bool).  Outputs that a query
-    does not fill have no rows: their sinks are empty.
+    :func:`drain_round` copies out (in place, pairs took longer); so do
+    all the results of the last, shorter block, to ``spare``, ``codes``
+    (int8) and ``flags`` (bool).  Outputs that a query does not fill have
+    no rows: their sinks are empty.  ``out`` is :func:`borrowed`, as the
+    block's arguments are.
     """
     if full and nb == BLOCK:
         return (
-            borrowed(out[0])[k0 : k0 + BLOCK],
-            borrowed(out[1])[k0 : k0 + BLOCK],
-            flat(borrowed(out[2])[k0 : k0 + BLOCK]),
-            borrowed(out[3])[k0 : k0 + BLOCK],
-            borrowed(out[4])[k0 : k0 + BLOCK],
-            borrowed(out[5])[k0 : k0 + BLOCK],
-            borrowed(out[6])[k0 : k0 + BLOCK],
+            out[0][k0 : k0 + BLOCK],
+            out[1][k0 : k0 + BLOCK],
+            flat(out[2][k0 : k0 + BLOCK]),
+            out[3][k0 : k0 + BLOCK],
+            out[4][k0 : k0 + BLOCK],
+            out[5][k0 : k0 + BLOCK],
+            out[6][k0 : k0 + BLOCK],
         )
     if not full:
-        unused = (borrowed(out[1]), spare[0, :0], borrowed(out[3]), borrowed(out[4]), borrowed(out[5]))
-        return (spare[0], *unused, borrowed(out[6]))
+        unused = (out[1], spare[0, :0], out[3], out[4], out[5])
+        return (spare[0], *unused, out[6])
     return spare[0], spare[1], flat(spare[2:5]), codes[0], flags[0], spare[5], spare[6]
 
 
@@ -474,16 +496,16 @@ def drain_round(sinks, out, k0, nb, full):
     :data:`BLOCK`."""
     d, s, p, f, e, h, r = sinks
     if not full or nb < BLOCK:
-        dist = borrowed(out[0])[k0 : k0 + nb]
+        dist = out[0][k0 : k0 + nb]
         for q in range(nb):
             dist[q] = d[q]
     if full and nb < BLOCK:
-        sqr, feature = borrowed(out[1])[k0 : k0 + nb], borrowed(out[3])[k0 : k0 + nb]
-        point = flat(borrowed(out[2])[k0 : k0 + nb])
+        sqr, feature = out[1][k0 : k0 + nb], out[3][k0 : k0 + nb]
+        point = flat(out[2][k0 : k0 + nb])
         flag, height, radial = (
-            borrowed(out[4])[k0 : k0 + nb],
-            borrowed(out[5])[k0 : k0 + nb],
-            borrowed(out[6])[k0 : k0 + nb],
+            out[4][k0 : k0 + nb],
+            out[5][k0 : k0 + nb],
+            out[6][k0 : k0 + nb],
         )
         for q in range(nb):
             sqr[q] = s[q]

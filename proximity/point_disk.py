@@ -32,6 +32,7 @@ from ._loops import (
     ROUND_U,
     block_scalars,
     block_vectors,
+    borrowed,
     drain_round,
     put_round,
     round_sinks,
@@ -344,6 +345,7 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
     says which); every other query is done one by one on the scalar path,
     which is the only path of the other methods.
     """
+    shape, P, out, exact = borrowed(shape), borrowed(P), borrowed(out), borrowed(exact)
     is_disk, C, U, N, R = shape
     copies = scratch(ROUND_ROWS, np.float64)
     c = block_vectors(copies, ROUND_C, C, n_j, k0, nb)
@@ -404,6 +406,7 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     compiler computes its own terms (such as the rim direction used on the
     axis) once per block instead of once per query.
     """
+    shape, P, out = borrowed(shape), borrowed(P), borrowed(out)
     is_disk, C, U, _, R = shape
     copies = scratch(3, np.float64)
     p = block_vectors(copies, 0, P, n_j, k0, nb)
