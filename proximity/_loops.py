@@ -135,20 +135,24 @@ def single_shape(view):
 # over the scratch that compiles to SIMD code, and scattered to the outputs.
 # The compute loop vectorises only when it runs over scratch allocated in the
 # same function, with this constant length, so every kernel's block function
-# allocates its own and gathers into it with the helpers below.  They are
-# written as plain loops over one run of the inner loop dimension at a time,
-# which the compiler turns into straight strided loads and stores: slice
-# assignments and per-element wrap-around tests cost more than the queries.
+# allocates its own (``np.empty``, or :func:`scratch` on the stack) and
+# gathers into it with the helpers below.  They are written as plain loops
+# over one run of the inner loop dimension at a time, which the compiler
+# turns into straight strided loads and stores: slice assignments and
+# per-element wrap-around tests cost more than the queries.  Disks and
+# circles read their inputs and write their results in place instead,
+# where they can (:func:`block_vectors`, :func:`round_sinks`).
 BLOCK = 128
 
 
-# Two pieces of Numba's array model below the public API (``make_array``,
-# ``populate_array``: the array structure's fields), which every Numba
-# release since 0.49 has kept.  A block runs once per 128 queries, so what
-# it costs besides its queries counts: ``np.empty`` for its scratch (a call
-# to the allocator and back, and an atomic reference count) took a third of
-# a million distances to one disk, and every view of an argument (a slice, a
-# reshape) two more atomic operations on a count that all threads share.
+# A block runs once per 128 queries, so what it costs besides its queries
+# counts.  For a million distances to one disk, ``np.empty`` for the scratch
+# (the allocator, and back) took a third of the time, and the reference
+# counts of the arguments and their views (atomic operations, on counts
+# that every thread shares) a tenth.  The three intrinsics below make
+# arrays that Numba does not count: they fill the array structure's fields
+# with ``make_array`` and ``populate_array``, below Numba's public API but
+# unchanged in every release this package accepts.
 
 
 @intrinsic
@@ -419,7 +423,7 @@ def scatter_common(z, first, k0, nb, out, full):
         s = borrowed(sqr)[k0 : k0 + nb]
         # The points as one run x0, y0, z0, x1, ...: a constant stride, which
         # the compiler writes with vector shuffles and stores.
-        p = flat(point[k0 : k0 + nb])
+        p = flat(borrowed(point)[k0 : k0 + nb])
         f = borrowed(feature)[k0 : k0 + nb]
         for q in range(nb):
             s[q] = z[first + 1, q]
