@@ -50,6 +50,7 @@ from .point_circle import (
     rim_direction,
     seed_circle,
     seed_projection,
+    short_radial,
     window,
 )
 from .primitives import CIRCLE, DISK
@@ -280,25 +281,31 @@ def exact_row(row, args, point):
 
 
 @inline
-def _robust_row(is_disk, axis, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
+def _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """One query of the compiled loops' robust path, without branches:
     its nine results, and whether they hold: in the safe window, with a
-    radial part of at least :data:`~.point_circle.Q_MIN`, and, unless
-    ``axis``, off the axis.  The others are done again on the scalar path,
-    which measures a shorter radial part again off the axis and gives the
-    same bits elsewhere.
+    radial part whose length has all its bits (else the scalar path
+    measures it again).
 
-    A loop that keeps the distance alone compiles without the test of the
-    axis (a square root) and the rim point (three divisions); without
-    ``axis``, a loop over many shapes compiles without the rim direction on
-    the axis, which depends on the shape's normal (a square root and three
-    more divisions per query).
+    ``lean`` (a constant) asks for less: a radial part of at least
+    :data:`~.point_circle.Q_MIN` whether or not on the axis, and, where
+    ``lean == 2``, a query off the axis.  A lean loop that keeps the
+    distance alone then compiles without the test of the axis (a square
+    root) and without the rim point (three divisions); one that keeps the
+    closest points of many shapes, without the rim direction on the axis,
+    which depends on each shape's normal (a square root and three more
+    divisions per query).  The queries a lean loop leaves are few but for
+    points on or next to the axis; a complete loop (``lean == 0``) answers
+    those of them that it can, with the same bits.
     """
     dx, dy, dz = px - cx, py - cy, pz - cz
     _, ok = window(dx, dy, dz, radius)
     h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-    ok = ok & (qq >= Q_MIN)
-    if not axis:
+    if lean:
+        ok = ok & (qq >= Q_MIN)
+    else:
+        ok = ok & (not short_radial(qq, on_axis))
+    if lean == 2:
         ok = ok & (not on_axis)
         on_axis = False
     res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
@@ -318,21 +325,27 @@ def _keep(sinks, oks, q, res, ok, full):
 
 
 @inline
-def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full):
+def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full, lean):
     """The SIMD loop of :func:`_block` over the runs of centers ``c``, unit
     normals ``u``, points ``p`` (``x0, y0, z0, x1, ...``) and radii ``r``;
-    returns how many queries it left to the scalar path.
-
-    Queries on the axis are left to the scalar path when the closest point
-    is kept: the rim direction there is fixed by each shape's normal.
-    """
+    returns how many queries it left to the scalar path."""
     left = 0
     for q in range(BLOCK):
         cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
-        res, ok = _robust_row(is_disk, not full, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
+        res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
         left += _keep(sinks, oks, q, res, ok, full)
     return left
+
+
+@inline
+def _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, lean):
+    """:func:`_pairs_loop`, lean or complete (see :func:`_robust_row`),
+    compiled for each kind of output so that the distance alone compiles
+    without the closest point's terms."""
+    if full:
+        return _pairs_loop(sinks, oks, c, u, p, r, is_disk, True, 2 if lean else 0)
+    return _pairs_loop(sinks, oks, c, u, p, r, is_disk, False, 1 if lean else 0)
 
 
 def _block(shape, P, n_j, k0, nb, out, exact, full):
@@ -357,12 +370,9 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
     sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
     left = nb
     if SIMD:
-        # A loop per kind of output, so that the distance alone compiles
-        # without the closest point's terms.
-        if full:
-            left = _pairs_loop(sinks, oks, c, u, p, r, is_disk, True)
-        else:
-            left = _pairs_loop(sinks, oks, c, u, p, r, is_disk, False)
+        left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, True)
+        if left:
+            left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, False)
     else:
         for q in range(nb):
             oks[q] = 0.0
@@ -385,16 +395,31 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
 
 
 @inline
-def _one_loop(sinks, oks, p, is_disk, full, cx, cy, cz, ux, uy, uz, radius):
+def _one_loop(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius):
     """The SIMD loop of :func:`_robust_block_one` over the points ``p``
     (``x0, y0, z0, x1, ...``); returns how many queries it left to the
     scalar path."""
     left = 0
     for q in range(BLOCK):
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
-        res, ok = _robust_row(is_disk, True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
         left += _keep(sinks, oks, q, res, ok, full)
     return left
+
+
+@inline
+def _one_pass(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius):
+    """:func:`_one_loop`, lean or complete (see :func:`_robust_row`; the
+    rim direction on the axis is a constant of the block here): one loop
+    for the distance alone (the kinds differ there by a select), and one for
+    each kind's full answer, so that each compiles to the work it keeps
+    only."""
+    lean = 1 if lean else 0
+    if not full:
+        return _one_loop(sinks, oks, p, is_disk, False, lean, cx, cy, cz, ux, uy, uz, radius)
+    if is_disk:
+        return _one_loop(sinks, oks, p, True, True, lean, cx, cy, cz, ux, uy, uz, radius)
+    return _one_loop(sinks, oks, p, False, True, lean, cx, cy, cz, ux, uy, uz, radius)
 
 
 @part
@@ -415,15 +440,9 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
-    # One loop for the distance alone (the kinds differ there by a select),
-    # and one for each kind's full answer, so that each compiles to the work
-    # it keeps only.
-    if not full:
-        left = _one_loop(sinks, oks, p, is_disk, False, cx, cy, cz, ux, uy, uz, radius)
-    elif is_disk:
-        left = _one_loop(sinks, oks, p, True, True, cx, cy, cz, ux, uy, uz, radius)
-    else:
-        left = _one_loop(sinks, oks, p, False, True, cx, cy, cz, ux, uy, uz, radius)
+    left = _one_pass(sinks, oks, p, is_disk, full, True, cx, cy, cz, ux, uy, uz, radius)
+    if left:
+        left = _one_pass(sinks, oks, p, is_disk, full, False, cx, cy, cz, ux, uy, uz, radius)
     if left:
         for q in range(nb):
             if oks[q] == 0.0:
