@@ -68,19 +68,23 @@ bench: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes
+	$(BIN)/python -m benchmarks.moving
+	$(BIN)/python -m benchmarks.signs
 	$(BIN)/python -m benchmarks.scale
 
 bench-quick: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m compileall -q proximity adapters
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes --quick
+	$(BIN)/python -m benchmarks.moving --quick
+	$(BIN)/python -m benchmarks.signs --quick
 	$(BIN)/python -m benchmarks.scale --quick
 
-# The API reference, from the docstrings, into docs/_build/html; a warning
-# fails the build.
+# The documentation site, into docs/_build/html: the Markdown pages of docs/
+# and the API reference from the docstrings; a warning fails the build.
 docs: $(DOCS_STAMP)
 	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
-	@echo "API reference: docs/_build/html/index.html"
+	@echo "documentation: docs/_build/html/index.html"
 
 clean:
 	rm -rf $(VENV) $(CORE) $(FLOOR) bench-results .pytest_cache docs/_build

@@ -108,7 +108,7 @@ def get(name, **options):
     ------
     ImportError
         If the library is not installed; the message names the extra to
-        install: ``pip install 'proximity3d[adapters]'``.
+        install: ``pip install '.[adapters]'`` in proximity's clone.
     ValueError
         For an unknown name.
 

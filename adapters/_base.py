@@ -40,7 +40,7 @@ DEFAULT_RELATIVE_TOL = 1e-3
 #: is refused rather than silently loosened.
 MAX_SEGMENTS = 1 << 16
 
-INSTALL_HINT = "pip install 'proximity3d[adapters]'"
+INSTALL_HINT = "pip install '.[adapters]' in proximity's clone"
 
 
 class Failure(enum.IntEnum):

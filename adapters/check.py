@@ -18,6 +18,7 @@ import numpy as np
 import proximity
 
 from . import NAMES, available, get
+from ._base import INSTALL_HINT
 from .crosscheck import cross_check
 
 RAW_TRIMESH = "trimesh-raw"
@@ -137,7 +138,7 @@ def main(argv=None):
     else:
         names = list(dict.fromkeys(args.backend))
     if not names:
-        print("no backend library is installed: pip install 'proximity3d[adapters]'", file=sys.stderr)
+        print(f"no backend library is installed: {INSTALL_HINT}", file=sys.stderr)
         return 1
 
     start = time.perf_counter()

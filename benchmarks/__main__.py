@@ -8,7 +8,9 @@ Steps, each from the saved output of the one before:
    (:mod:`benchmarks.report`) are drawn from that file;
 3. the speed comparison (``python -m benchmarks.speed``, when present)
    runs in a new process; its output is saved to ``OUT/speed.txt`` and
-   added to the report.
+   added to the report, and its verdicts on the project's targets to
+   ``OUT/checks-speed.txt``, apart from what the report shows (one line on
+   stderr counts them).
 
 Options: ``--quick`` for a smoke run (small batches; about half a minute
 for the suite on two cores, kernels cached), ``--seed``,
@@ -31,7 +33,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def run_speed(quick, path, package_python=None):
+def run_speed(quick, path, package_python=None, checks=None):
     """Run ``python -m benchmarks.speed`` in a new process, echoing and saving
     its output (with any traceback) to ``path``.
 
@@ -52,6 +54,8 @@ def run_speed(quick, path, package_python=None):
     command = [sys.executable, "-m", "benchmarks.speed"] + (["--quick"] if quick else [])
     if package_python:
         command += ["--package-python", package_python]
+    if checks is not None:
+        command += ["--checks", str(checks)]
     lines = []
     with subprocess.Popen(
         command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
@@ -107,8 +111,15 @@ def main(argv=None):
     pngs = charts.draw_all(raw, out)
     report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
     if not args.report_only and not args.no_speed:
-        ok = run_speed(raw["meta"]["config"]["quick"], speed_path, args.package_python)
+        checks = out / "checks-speed.txt"
+        checks.unlink(missing_ok=True)
+        ok = run_speed(raw["meta"]["config"]["quick"], speed_path, args.package_python, checks)
         report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
+        if checks.exists():
+            verdicts = checks.read_text(encoding="utf-8").splitlines()
+            missed = sum(line.startswith("MISSED") for line in verdicts)
+            print(f"the project's targets: {len(verdicts) - missed} of {len(verdicts)} met ({checks})",
+                  file=sys.stderr)  # fmt: skip
     print(f"report: {out / 'report.md'}", file=sys.stderr)
     if args.publish:
         report.publish(raw, pngs, docs=ROOT / "docs", page=ROOT / "docs" / "benchmarks.md")

@@ -4,10 +4,11 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
 
 ``accuracy_speed.png``
     For each query type, queries per second against the worst and median
-    error, in ``eps * S`` (every answered query) and in ulps of ``d*`` (the
-    queries with ``d* > 0``: where the exact distance is 0 an ulp is the
-    smallest subnormal and measures nothing), one marker per method or
+    error, in ``eps * S`` (every answered query) and relative to the exact
+    distance ``d*`` (the queries with ``d* > 0``), one marker per method or
     backend, with the Pareto front of those that answered every query.
+    Errors of 0 (and below the axis' floor) are drawn on the floor, which
+    is labelled.
 ``stability_triangle.png``, ``stability_round.png``
     Each sweep of :mod:`proximity.testing.scenes`: the worst error against the
     swept difficulty, one line per method or backend, over a strip that
@@ -17,6 +18,11 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
     For backends that cut circles and disks into ``K`` segments: error and
     time per query against ``K``, with the sagitta bound and proximity's
     ``robust`` for comparison.
+``mesh_peers.png``
+    From the mesh benchmark's comparison with other libraries
+    (:func:`benchmarks.meshes.run_peers`, its own raw data): for each mesh
+    and point set, points per second on one thread against the largest
+    error, relative to the mesh's size, one marker per library.
 
 Every chart has a title, labelled axes with units, and a caption
 (:data:`CAPTIONS`, also printed under it in the report) saying what to look at.
@@ -42,15 +48,27 @@ STYLE = {
 }
 _SPARE = [("tab:olive", "P"), ("tab:cyan", "X"), ("tab:gray", "*"), ("black", "h")]
 
-#: Smallest error drawn: an exact answer (error 0) is drawn here.
+#: Smallest error drawn in eps*S: an exact answer (error 0) is drawn here.
 FLOOR = 1e-2
 
-#: Top of the error axes.  In ulps, where ``d* = 0`` the unit is the smallest
-#: subnormal, so errors reach 1e300 and beyond; above this they are written out.
-CAP = {"error_eps_s": 10.0**307.5, "error_ulps": 1e32}
+#: The same for each unit of the accuracy chart: a relative error of 1e-18 is
+#: far below a double's resolution, 2.2e-16.
+FLOORS = {"error_eps_s": FLOOR, "error_relative": 1e-18}
+
+#: Top of the error axes; above this, errors are written out.
+CAP = {"error_eps_s": 10.0**307.5, "error_relative": 1e30}
 
 #: robust's bound, drawn for reference, in eps*S.
 BOUND = 8.0
+
+#: certified's bound, relative to d*: one ulp of d* is at most 2^-52 of it.
+RELATIVE_BOUND = 2.0**-52
+
+#: The reference line of each unit, and its label.
+BOUNDS = {
+    "error_eps_s": (BOUND, "8 eps·S: robust's bound"),
+    "error_relative": (RELATIVE_BOUND, "2.2e-16 (one ulp): certified's bound"),
+}
 
 #: Axis labels of each sweep's difficulty.
 DIFFICULTY = {
@@ -79,9 +97,10 @@ _STABILITY_CAPTION = (
 CAPTIONS = {
     "accuracy_speed": (
         "What to look at: markers low and to the right are accurate and fast (filled: worst, hollow: "
-        "median). Top row: error in eps·S, the unit of robust's bound, over every answered query. "
-        "Bottom row: error in ulps of the exact distance d* where d* > 0, the unit of certified's bound; "
-        "robust's bound is absolute, so where d* is tiny beside S its error is many ulps of d*."
+        "median). Top row: error in eps·S (eps = 2.2e-16, S the query's size), the unit of robust's "
+        "bound, over every answered query. Bottom row: error relative to the exact distance d*, where "
+        "d* > 0; certified stays within one ulp of d*. robust's bound is on the size: for a point a "
+        "hair's breadth from the shape its relative error can be large while its error is a few eps·S."
     ),
     "stability_triangle": _STABILITY_CAPTION,
     "stability_round": _STABILITY_CAPTION,
@@ -89,6 +108,24 @@ CAPTIONS = {
         "What to look at: the gap between the libraries' lines and proximity's flat blue lines; "
         "the libraries' error follows the sagitta and shrinks only as K, and with it their time, grows."
     ),
+    "mesh_peers": (
+        "What to look at: markers low and to the right are accurate and fast. Every library on one "
+        "thread, on the same points; the error is the largest against the exact distance, over the "
+        "first points of each set, as a fraction of the mesh's size. A red count: points answered with "
+        "a face that is not the nearest (or no answer), over every point timed."
+    ),
+}
+
+#: Colours and markers of the mesh benchmark's libraries.
+PEER_STYLE = {
+    "proximity": ("tab:blue", "o"),
+    "open3d": ("tab:green", "s"),
+    "libigl": ("tab:orange", "D"),
+    "warp": ("tab:purple", "v"),
+    "coal": ("tab:brown", "P"),
+    "fcl": ("tab:red", "^"),
+    "pcu": ("tab:olive", "X"),
+    "trimesh": ("tab:pink", "<"),
 }
 
 
@@ -159,7 +196,7 @@ def accuracy_speed(raw, path):
     ulps of ``d*`` over those with ``d* > 0`` (see :mod:`benchmarks.summary`).
     """
     plt = _plt()
-    units = list(summary.UNITS)
+    units = list(summary.SHOWN)
     fig, axes = plt.subplots(len(units), 3, figsize=(13, 9.2), squeeze=False)
     seen = {}
     for col, kind in enumerate(summary.KINDS):
@@ -170,7 +207,7 @@ def accuracy_speed(raw, path):
             seen.update(handles)
             on_shape = max((s.on_shape for s in stats.values()), default=0)
             lines = [f"point–{kind}"] if row == 0 else []
-            if unit == "error_ulps" and on_shape:
+            if unit != "error_eps_s" and on_shape:
                 lines.append(f"{on_shape} queries with d* = 0 left out (they are in the row above)")
             if note:
                 lines.append(note)
@@ -203,7 +240,7 @@ def accuracy_speed(raw, path):
     fig.text(
         0.5,
         0.955,
-        _subtitle(raw) + f"  ·  errors of {FLOOR:g} or less, 0 included, drawn at {FLOOR:g}",
+        _subtitle(raw) + "  ·  errors of 0 drawn on the labelled floor of each axis",
         ha="center",
         fontsize=8,
         color="dimgray",
@@ -228,7 +265,8 @@ def _speed_panel(ax, stats, unit, failures):
     ax.set_yscale("log")
     ax.set_autoscale_on(False)
     speeds = [s.qps for s in stats.values() if math.isfinite(s.qps)]
-    errors = [BOUND if unit == "error_eps_s" else 1.0]
+    floor = FLOORS[unit]
+    errors = [BOUNDS[unit][0]]
     errors += [
         e
         for s in stats.values()
@@ -238,10 +276,16 @@ def _speed_panel(ax, stats, unit, failures):
     if not speeds:
         return {}, ""
     ax.set_xlim(min(speeds) / 3, max(speeds) * 3)
-    low, high = math.log10(max(min(errors), FLOOR)), math.log10(max(max(errors), FLOOR))
+    low, high = math.log10(max(min(errors), floor)), math.log10(max(max(errors), floor))
     top = min(high + 0.08 * (high - low) + 0.5, math.log10(CAP[unit]))
-    ax.set_ylim(10.0 ** (low - 0.6), 10.0**top)
-    _log_ticks(ax.yaxis, low - 0.6, top)
+    on_floor = any(
+        min(s.worst[unit], s.median[unit]) <= floor
+        for s in stats.values()
+        if math.isfinite(s.qps) and not math.isnan(s.worst[unit])
+    )
+    bottom = math.log10(floor) - 0.3 if on_floor else low - 0.6
+    ax.set_ylim(10.0**bottom, 10.0**top)
+    _log_ticks(ax.yaxis, bottom, top, floor=floor if on_floor else None)
     handles, points, off_scale = {}, [], []
     for name, s in stats.items():
         colour, marker = style(name)
@@ -251,7 +295,7 @@ def _speed_panel(ax, stats, unit, failures):
         if not math.isfinite(x) or math.isnan(worst):
             continue
         # Errors beyond the axis (past the float range, in ulps of a zero d*) sit on its top edge.
-        shown = [min(max(v, FLOOR), 10.0**top) for v in (median, worst)]
+        shown = [min(max(v, floor), 10.0**top) for v in (median, worst)]
         ax.plot([x, x], shown, color=colour, lw=1, alpha=0.6, zorder=2)
         handles[name] = ax.scatter(
             x,
@@ -292,10 +336,10 @@ def _speed_panel(ax, stats, unit, failures):
         note = f"markers on the top edge: worst beyond {_short(10.0**top)}, up to " + (
             _short(most) if math.isfinite(most) else "past the float range"
         )
-    bound, label = (
-        (BOUND, "8 eps·S: robust's bound") if unit == "error_eps_s" else (1.0, "1 ulp: certified's bound")
-    )
+    bound, label = BOUNDS[unit]
     ax.axhline(bound, color="gray", ls=":", lw=1)
+    if on_floor:
+        ax.axhline(floor, color="lightgray", lw=0.8, zorder=1)
     ax.annotate(
         label,
         (1, bound),
@@ -307,7 +351,7 @@ def _speed_panel(ax, stats, unit, failures):
         color="gray",
     )
     ax.grid(True, which="major", alpha=0.3)
-    _draw_front(ax, [points[i] for i in summary.pareto(points)])
+    _draw_front(ax, [points[i] for i in summary.pareto(points)], floor)
     return handles, note
 
 
@@ -316,24 +360,34 @@ def _short(x):
     return f"{x:.2g}".replace("e+", "e")
 
 
-def _log_ticks(axis, low, high, most=8):
+def _log_ticks(axis, low, high, most=8, floor=None):
     """Decade ticks between ``10**low`` and ``10**high``, at most ``most`` of them.
 
     Fixed ticks: matplotlib's log locator steps past the axis, and past the
-    float range when the axis ends near it.
+    float range when the axis ends near it.  With ``floor``, where errors of
+    0 are drawn, that tick reads "0 (≤ floor)" and the decades start above it.
     """
-    from matplotlib.ticker import FixedLocator, LogFormatterSciNotation, NullLocator
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
     span = max(high - low, 1.0)
     step = next(k for k in (1, 2, 5, 10, 20, 25, 50, 100, 200) if span / k <= most)
     first = math.ceil(low / step) * step
-    axis.set_major_locator(FixedLocator([10.0**k for k in range(first, math.floor(high) + 1, step)]))
-    axis.set_major_formatter(LogFormatterSciNotation())
-    if step > 1:
+    ticks = [10.0**k for k in range(first, math.floor(high) + 1, step)]
+    if floor is not None:
+        ticks = [floor] + [t for t in ticks if t >= floor * 10.0 ** max(step, 1)]
+
+    def label(value, _position=None):
+        if floor is not None and math.isclose(value, floor):
+            return f"0 (≤{_short(floor)})"
+        return f"$10^{{{round(math.log10(value))}}}$"
+
+    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_formatter(FuncFormatter(label))
+    if step > 1 or floor is not None:
         axis.set_minor_locator(NullLocator())
 
 
-def _draw_front(ax, front):
+def _draw_front(ax, front, floor=FLOOR):
     """The Pareto front as the boundary of the region it dominates, which is shaded.
 
     ``front`` is sorted by speed; along it the error grows.  A point is
@@ -342,10 +396,10 @@ def _draw_front(ax, front):
     if not front:
         return
     (left, right), (bottom, top) = ax.get_xlim(), ax.get_ylim()
-    xs, ys = [left], [max(front[0][1], FLOOR)]
+    xs, ys = [left], [max(front[0][1], floor)]
     for (x, y), following in zip(front, front[1:] + [(None, top)], strict=True):
         xs += [x, x]
-        ys += [max(y, FLOOR), max(following[1], FLOOR)]
+        ys += [max(y, floor), max(following[1], floor)]
     ax.plot(xs, ys, color="black", ls="--", lw=1, zorder=1)
     ax.fill_between(xs, ys, top, color="gray", alpha=0.08, zorder=0, lw=0)
     ax.set_xlim(left, right)
@@ -601,6 +655,91 @@ def tessellation(raw, path):
     _caption(fig, "tessellation")
     # Fixed margins: tight_layout would shrink a panel to make room for the other's wider legend.
     fig.subplots_adjust(left=0.07, right=0.98, top=0.86, bottom=0.36, wspace=0.22)
+    return _save(fig, path)
+
+
+# -- 4. the mesh benchmark's libraries ------------------------------------------------------
+
+
+def mesh_peers(raw, path):
+    """Points per second (one thread) against the largest error relative to
+    the mesh's size, per mesh and point set, from :func:`benchmarks.meshes.run_peers`'s data."""
+    meshes = [(label, entry) for label, entry in raw["meshes"].items() if entry["peers"]]
+    if not meshes:
+        return None
+    plt = _plt()
+    sets = ("near", "box")
+    fig, axes = plt.subplots(
+        len(meshes), len(sets), figsize=(11, 3.3 * len(meshes) + 2.2), squeeze=False
+    )
+    floor = 1e-19
+    handles = {}
+    for row, (label, entry) in enumerate(meshes):
+        for col, set_name in enumerate(sets):
+            ax = axes[row, col]
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            drawn = []
+            for name, peer in entry["peers"].items():
+                record = peer["runs"].get("1", {})
+                timing = record.get("sets", {}).get(set_name, {}).get("unsigned")
+                if not timing or "errors" not in timing:
+                    continue
+                errors = timing["errors"]
+                relative = errors["max_error"] / entry["size"]
+                x, y = timing["qps"], max(relative, floor) if math.isfinite(relative) else None
+                if y is None:
+                    continue
+                colour, marker = PEER_STYLE.get(name, style(name))
+                handles[peer["label"]] = ax.scatter(
+                    x, y, s=60, color=colour, marker=marker, edgecolors="black", lw=0.5, zorder=3
+                )
+                drawn.append(y)
+                if errors["off"]:
+                    ax.annotate(
+                        f"{errors['off']:,} of {errors['n']:,} off",
+                        (x, y),
+                        xytext=(6, 4),
+                        textcoords="offset points",
+                        fontsize=8,
+                        color="firebrick",
+                    )
+            if not drawn:
+                ax.set_visible(False)
+                continue
+            low = math.log10(min(drawn + [2.0**-53]))
+            high = math.log10(max(drawn + [2.0**-24]))
+            on_floor = min(drawn) <= floor
+            bottom = math.log10(floor) - 0.5 if on_floor else low - 0.7
+            ax.set_ylim(10.0**bottom, 10.0 ** (high + 0.8))
+            _log_ticks(ax.yaxis, bottom, high + 0.8, floor=floor if on_floor else None)
+            for value, text in ((2.0**-53, "float64 resolution, 1.1e-16"), (2.0**-24, "float32, 6e-8")):
+                ax.axhline(value, color="gray", ls=":", lw=1)
+                ax.annotate(text, (0.99, value), xycoords=("axes fraction", "data"), xytext=(0, 3),
+                            textcoords="offset points", fontsize=7, color="gray", ha="right")  # fmt: skip
+            left, right = ax.get_xlim()
+            ax.set_xlim(left / 2, right * 2)
+            ax.grid(True, which="major", alpha=0.3)
+            ax.set_title(f"{label}: {set_name} points", fontsize=10)
+            if col == 0:
+                ax.set_ylabel("largest error / mesh size")
+            if row == len(meshes) - 1:
+                ax.set_xlabel("points per second, one thread (unsigned distance)")
+    fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=min(len(handles), 4),
+               frameon=False, bbox_to_anchor=(0.5, 0.07))  # fmt: skip
+    meta = raw["meta"]
+    fig.suptitle("Meshes: accuracy against speed, proximity and the other libraries", y=0.995)
+    fig.text(
+        0.5,
+        1 - 0.55 / fig.get_figheight(),
+        f"{meta['command']}  ·  seed {meta['seed']}  ·  {meta['points']:,} points per set, errors over the "
+        f"first {meta['exact_sample']}  ·  {meta['cpus']} cores  ·  errors of 0 drawn on the labelled floor",
+        ha="center",
+        fontsize=8,
+        color="dimgray",
+    )
+    _caption(fig, "mesh_peers")
+    fig.tight_layout(rect=(0, 1.9 / fig.get_figheight(), 1, 1 - 0.7 / fig.get_figheight()))
     return _save(fig, path)
 
 

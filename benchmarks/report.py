@@ -47,7 +47,7 @@ def summary_table(raw):
     """Markdown: per query type and entity, speed, errors, failures."""
     lines = [
         "| query | method / backend | queries/s | worst (eps·S) | median (eps·S) "
-        "| worst (ulps of d*, d* > 0) | median (ulps of d*, d* > 0) | worst where d* = 0 (eps·S) "
+        "| worst relative (d* > 0) | median relative (d* > 0) | worst where d* = 0 (eps·S) "
         "| failed | beyond bound |",
         "|---|---|---:|---:|---:|---:|---:|---:|---|---:|",
     ]
@@ -57,13 +57,15 @@ def summary_table(raw):
             label = f"`{name}`" if kinds[name] == "method" else name
             lines.append(
                 f"| point–{kind} | {label} | {num(s.qps)} | {num(s.worst['error_eps_s'])} "
-                f"| {num(s.median['error_eps_s'])} | {num(s.worst['error_ulps'])} "
-                f"| {num(s.median['error_ulps'])} | {num(s.on_shape_worst)} | {_failed(s)} | {s.beyond} |"
+                f"| {num(s.median['error_eps_s'])} | {num(s.worst['error_relative'])} "
+                f"| {num(s.median['error_relative'])} | {num(s.on_shape_worst)} | {_failed(s)} | {s.beyond} |"
             )
     return "\n".join(lines)
 
 
-def _provenance(raw):
+def _provenance(raw, commit=True):
+    """Where and how the run was made; ``commit``: with the commit it ran at (the
+    report), or without (the published page, whose figures stand for the code as it is)."""
     meta = raw["meta"]
     machine, versions, cfg = meta["machine"], meta["versions"], meta["config"]
     load = machine.get("load_average") or {}
@@ -72,7 +74,7 @@ def _provenance(raw):
             str(v) for k, v in versions.items() if k not in ("proximity", "commit", "numpy", "numba") and v
         )
     )
-    commit = f" at commit {versions['commit']}" if versions.get("commit") else ""
+    commit = f" at commit {versions['commit']}" if commit and versions.get("commit") else ""
     return (
         f"`{meta['command']}` on {meta['date'][:10]}: {machine['cpu']}, {machine['cores']} cores "
         f"(load average {load.get('before', '?')} before, {load.get('after', '?')} after), "
@@ -85,11 +87,13 @@ def _provenance(raw):
 
 METHOD_NOTES = """\
 * **Errors** are `|d - d*|` against the exact reference (`proximity.testing.exact`: rational arithmetic on the
-  floats' exact values), in two units: `eps·S`, with `eps = 2^-52` and `S = max_i |P - V_i|` for
-  triangles or `|P - C| + R` for disks and circles (`robust` promises at most 8), and ulps of `d*`
-  over the queries with `d* > 0`.  Where `d* = 0` (the point is on the shape) an ulp of `d*` would
-  be the smallest subnormal, which measures nothing; those queries have their own column, in
-  `eps·S`.  An error in ulps past the float range is shown as `> 1.8e308`.
+  floats' exact values), in two units: `eps·S`, with `eps = 2^-52 ≈ 2.2e-16` and `S = max_i |P - V_i|` for
+  triangles or `|P - C| + R` for disks and circles, the query's size (`robust` promises at most 8: an
+  error of a few units in the 16th digit of the query's size), and relative to the distance,
+  `|d - d*| / d*`, over the queries with `d* > 0` (`certified` promises one ulp of `d*`, at most
+  `2.2e-16` of it; `robust`'s bound is on the size, so for a point very close to the shape its
+  relative error can be large while its error in `eps·S` stays below 8).  Where `d* = 0` (the point
+  is on the shape) there is no relative error; those queries have their own column, in `eps·S`.
 * **Statistics are over the answered queries.**  Queries without an answer are counted by reason
   instead: NaN, inf or an exception for proximity's methods; the adapters' failure codes for the
   libraries (`docs/adapters.md`): no result, sentinel, false touching, point off the shape,
@@ -309,13 +313,14 @@ def page_section(raw, charts, images=""):
         for name, path in charts.items()
     )
     return f"""\
-The numbers below: {_provenance(raw)}
+The numbers below: {_provenance(raw, commit=False)}
 
 {summary_table(raw)}
 
-Errors are over the answered queries, in units of `eps·S` (robust's bound is 8) and in ulps of `d*`
-over the queries with `d* > 0`; where `d* = 0` (the point is on the shape) the ulp would be the
-smallest subnormal, so those queries have their own column in `eps·S`.  Unanswered queries are
+Errors are over the answered queries, in units of `eps·S` (`eps = 2^-52`, `S` the query's size;
+robust's bound is 8) and relative to the exact distance `d*` over the queries with `d* > 0`
+(certified's bound is one ulp of `d*`, at most 2.2e-16 of it); where `d* = 0` (the point is on the
+shape) there is no relative error, so those queries have their own column in `eps·S`.  Unanswered queries are
 counted under "failed", by reason.  "Beyond bound" counts answers outside the method's bound
 ({_bounds(raw)}; `eberly`, which promises nothing, against `robust`'s) or outside the backend's
 documented tolerance.  The libraries are timed through the adapters, which build a model per shape

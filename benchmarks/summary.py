@@ -7,6 +7,12 @@ are counted by reason instead.  Errors in ulps of ``d*`` are over the rows
 with ``d* > 0``: where the exact distance is 0 its ulp is the smallest
 subnormal, and any error, however small against the query's size, is then
 some 1e300 ulps.  Those rows are summarised apart, in ``eps * S``.
+
+What the report and charts show a reader are the errors in ``eps * S``
+(``eps = 2^-52``, ``S`` the query's size: robust's bound is 8) and the
+relative error ``|d - d*| / d*`` where ``d* > 0`` (certified's bound is one
+ulp of ``d*``, at most ``2^-52`` of it); ulps of ``d*`` stay in the
+statistics for the tests and the raw data.
 """
 
 import math
@@ -20,7 +26,13 @@ KINDS = ("triangle", "disk", "circle")
 UNITS = {
     "error_eps_s": "eps·S",
     "error_ulps": "ulps of d*, where d* > 0",
+    "error_relative": "|d − d*| / d*, where d* > 0",
 }
+
+#: The units the report and the charts show.
+SHOWN = ("error_eps_s", "error_relative")
+
+EPS = 2.0**-52
 
 #: Readable names of the failure reasons.
 REASONS = {
@@ -52,8 +64,9 @@ class Stats:
         Answered queries beyond the entity's bound (``8 eps S`` for
         proximity's methods, the documented tolerance for backends).
     worst, median : dict of str to float
-        By unit (``error_eps_s``, ``error_ulps``), over the answered queries
-        (for ``error_ulps``, those with ``d* > 0``); NaN when there are none.
+        By unit (``error_eps_s``, ``error_ulps``, ``error_relative``), over
+        the answered queries (for the last two, those with ``d* > 0``); NaN
+        when there are none.
     on_shape : int
         Answered queries whose exact distance is 0 (the point is on the
         shape), when the exact distances were given.
@@ -99,20 +112,32 @@ def answered_errors(record, unit, rows=None):
     )
 
 
-def stats(records, labels=None, exact=None):
+def _relative(record, d_exact, scale):
+    """``|d - d*| / d*`` of the answered rows with ``d* > 0`` (inf where stored as None)."""
+    d = np.asarray(d_exact, dtype=np.float64)
+    rows = d > 0
+    in_s = answered_errors(record, "error_eps_s", rows)
+    failed = {i for rows_ in record["failed"].values() for i in rows_}
+    kept = np.array([i for i in np.flatnonzero(rows) if i not in failed], dtype=np.intp)
+    return in_s * EPS * np.asarray(scale, dtype=np.float64)[kept] / d[kept]
+
+
+def stats(records, labels=None, exact=None, scales=None):
     """Pool the records of one entity (one per family) into :class:`Stats`.
 
     ``exact`` holds each family's exact distances (``d_exact``); with them,
     errors in ulps leave out the rows where ``d* = 0``, which are counted in
-    ``on_shape`` instead.
+    ``on_shape`` instead.  ``scales`` (each family's ``scale``, the ``S`` of
+    each row) gives the relative errors, with ``exact``.
     """
     labels = labels or [""] * len(records)
     exact = exact or [None] * len(records)
+    scales = scales or [None] * len(records)
     out = Stats()
     pooled = {unit: [] for unit in UNITS}
     on_shape = []
     speeds = []
-    for label, record, d_exact in zip(labels, records, exact, strict=True):
+    for label, record, d_exact, scale in zip(labels, records, exact, scales, strict=True):
         n = len(record["error_eps_s"])
         out.n += n
         out.answered += record["answered"]
@@ -123,6 +148,10 @@ def stats(records, labels=None, exact=None):
             out.failing_families.append(label)
         zero = None if d_exact is None else np.asarray(d_exact, dtype=np.float64) == 0.0
         for unit in UNITS:
+            if unit == "error_relative":
+                if d_exact is not None and scale is not None:
+                    pooled[unit].append(_relative(record, d_exact, scale))
+                continue
             rows = None if zero is None or unit != "error_ulps" else ~zero
             pooled[unit].append(answered_errors(record, unit, rows))
         if zero is not None and zero.any():
@@ -156,8 +185,9 @@ def by_kind(raw, kind):
     records = families(raw, kind)
     labels = [f["family"] for f in records]
     exact = [f["d_exact"] for f in records]
+    scales = [f["scale"] for f in records]
     return {
-        name: stats([f["results"][name] for f in records], labels, exact)
+        name: stats([f["results"][name] for f in records], labels, exact, scales)
         for name, _ in entities(raw, kind)
         if all(name in f["results"] for f in records)
     }
@@ -166,7 +196,13 @@ def by_kind(raw, kind):
 def by_family(raw, kind):
     """``[(family record, {entity: Stats})]`` for a query type."""
     return [
-        (f, {name: stats([record], [f["family"]], [f["d_exact"]]) for name, record in f["results"].items()})
+        (
+            f,
+            {
+                name: stats([record], [f["family"]], [f["d_exact"]], [f["scale"]])
+                for name, record in f["results"].items()
+            },
+        )
         for f in families(raw, kind)
     ]
 

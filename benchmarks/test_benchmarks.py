@@ -1,7 +1,9 @@
 """Tests of the benchmark's own code (``make test`` runs them from a clone).
 
-The summary never states an error where d* = 0 in ulps of 0; the
-point-cloud benchmark runs and cleans up after itself.
+The summary never states an error where d* = 0 in ulps of 0; relative
+errors leave those rows out; the speed table states facts and the targets
+go to the checks; the mesh chart draws; the point-cloud benchmark runs and
+cleans up after itself.
 """
 
 import json
@@ -61,3 +63,60 @@ def test_the_scale_benchmark_runs_and_deletes_its_files(tmp_path):
     assert len(runs["command, LocalCluster(2)"]["peak_rss_bytes"]["workers"]) == 2
     table = (tmp_path / "scale.md").read_text().splitlines()
     assert sum(line.startswith("| command") for line in table) == 3
+
+
+def test_relative_errors_are_over_the_rows_off_the_shape():
+    # Row 1 is on the shape (no relative error); rows 0 and 2: error * eps * S / d*.
+    record = _record([0.25, 0.5, 4.0], [0.75, 1e300, 0.5])
+    s = summary.stats([record], exact=[[1.0, 0.0, 2.0]], scales=[[2.0, 1.0, 1.0]])
+    assert s.worst["error_relative"] == 4.0 * 2.0**-52 / 2.0
+    assert s.median["error_relative"] == (0.25 * 2.0**-52 * 2.0 + 4.0 * 2.0**-52 / 2.0) / 2
+
+
+def _speed_rows():
+    from benchmarks import speed
+
+    rows = [
+        speed._row("pairs: robust vs trimesh", 1.0, 30.0, 1e6, 15.0),
+        speed._row("pairs: eberly vs trimesh", 1.0, 20.0, 1e6, 25.0),  # 20x: below its target
+        speed._seconds_row("empty cache: first result", 2.5, 3.0),
+        speed._seconds_row("start-up floor", 0.3, None),
+    ]
+    return speed, rows
+
+
+def test_the_speed_table_states_facts_and_the_checks_hold_the_targets():
+    speed, rows = _speed_rows()
+    table = speed.format_table(rows)
+    assert "30.00x" in table and "20.00x" in table and "2.50 s" in table
+    assert table.splitlines()[0] == "| case | proximity | baseline | ratio |"
+    assert not any(word in table for word in ("target", "limit", "**no**", "yes", "BELOW"))
+    missed, lines = speed.checks(rows)
+    assert missed == 1 and len(lines) == 3
+    assert lines[1].startswith("MISSED  pairs: eberly vs trimesh: 20.00x (target at least 25x)")
+    assert lines[2].startswith("met     empty cache: first result: 2.50 s (target at most 3 s)")
+
+
+def test_the_mesh_chart_draws_from_the_peers_data(tmp_path):
+    from benchmarks import charts
+
+    def run(qps, error, off=0):
+        timing = {"qps": qps, "errors": {"max_error": error, "off": off, "n": 1000}}
+        return {"1": {"sets": {"near": {"unsigned": timing}, "box": {"unsigned": timing}}}}
+
+    raw = {
+        "meta": {"command": "python -m benchmarks.meshes --quick", "seed": 0, "points": 1000,
+                 "exact_sample": 50, "cpus": 2},  # fmt: skip
+        "meshes": {
+            "icosphere, 1,280 faces": {
+                "size": 2.0,
+                "peers": {
+                    "proximity": {"label": "proximity (robust)", "runs": run(1e6, 0.0)},
+                    "open3d": {"label": "Open3D RaycastingScene", "runs": run(5e5, 1e-7, off=3)},
+                    "fcl": {"label": "python-fcl, per point", "runs": {"1": {"skipped": "not installed"}}},
+                },
+            }
+        },
+    }
+    path = charts.mesh_peers(raw, tmp_path / "mesh_peers.png")
+    assert path.exists() and path.stat().st_size > 10_000

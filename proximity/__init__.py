@@ -4,6 +4,8 @@ Point-triangle, point-circle and point-disk distance, on single points and
 NumPy batches, behind one shape protocol.
 """
 
+from __future__ import annotations
+
 import importlib.machinery
 import os
 import sys
@@ -43,8 +45,11 @@ _map_source_adapters()
 from . import _pool  # noqa: E402
 from ._counts import stats as certified_stats  # noqa: E402
 from ._threads import threads  # noqa: E402
+from ._typing import ArrayLike, Distances  # noqa: E402
+from ._validate import keyword_only_signature  # noqa: E402
 from .inflated import Capsule, Inflated, Sphere  # noqa: E402
 from .mesh import TriangleMesh  # noqa: E402
+from .posed import Posed  # noqa: E402
 from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
@@ -70,6 +75,7 @@ __all__ = [
     "MeshResult",
     "Point",
     "PointResult",
+    "Posed",
     "Result",
     "Scene",
     "SceneResult",
@@ -90,7 +96,7 @@ __all__ = [
 __version__ = "0.1.0"
 
 
-_SHAPES = (Triangle, Segment, Point, Circle, Disk, TriangleMesh, Scene, Inflated, Sphere, Capsule)
+_SHAPES = (Triangle, Segment, Point, Circle, Disk, TriangleMesh, Scene, Inflated, Sphere, Capsule, Posed)
 _SHAPE_TYPES = frozenset(_SHAPES)
 
 
@@ -99,37 +105,67 @@ def _check(shape):
     # (which inspects every attribute): the function form costs what the method does.
     if type(shape) in _SHAPE_TYPES or isinstance(shape, _SHAPES):
         return shape
+    from ._meshlike import looks_like_a_mesh
+
+    hint = "; use proximity.TriangleMesh(mesh) first" if looks_like_a_mesh(shape) else ""
     raise TypeError(
-        "shape must be a proximity shape (Triangle, Circle, Disk, TriangleMesh, Scene); "
-        f"got {type(shape).__name__}"
+        f"shape must be a proximity shape ({', '.join(s.__name__ for s in _SHAPES)}); "
+        f"got {type(shape).__name__}{hint}"
     )
 
 
-def closest_point(shape, points, *args, method=DEFAULT_METHOD):
+@keyword_only_signature
+def closest_point(
+    shape: Shape,
+    points: ArrayLike,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> Result:
     """Closest point on ``shape`` to each of ``points``.
+
+    The function form of ``shape.closest_point(points, method=method)``.
 
     Parameters
     ----------
     shape : Shape
-        A :class:`Triangle`, :class:`Circle` or :class:`Disk` (or a batch).
-    points : array_like, shape ``(..., D)``
-        Query points.  Their leading dimensions broadcast against the shape's
-        batch dimensions like a NumPy ufunc: ``(N, D)`` against one shape,
-        ``(N, D)`` against ``N`` shapes pairwise, ``(N, 1, D)`` against ``M``
-        shapes for all pairs.  Rows containing NaN or inf give NaN (feature
-        ``Feature.NONE``) in those rows only.
-    method : {"robust", "certified", "eberly"}, keyword-only
-        ``robust`` (default) is accurate to ``8 eps S + 2^-1075`` on every finite input;
-        ``certified`` is faithfully rounded (within one ulp of the exact
-        distance) with the exact closest feature; ``eberly`` is Eberly's
-        algorithm as written, kept as a baseline (NaN on zero-area
-        triangles).
+        Any shape of the package: a :class:`Triangle`, :class:`Segment`,
+        :class:`Point`, :class:`Circle` or :class:`Disk` (one, or a batch of
+        them), a :class:`TriangleMesh`, a :class:`Scene`, or a rounded shape
+        (:class:`Sphere`, :class:`Capsule`, :class:`Inflated`).  A mesh of
+        another library (trimesh, Open3D, ...) is not one: wrap it in
+        :class:`TriangleMesh` first.
+    points : array_like, shape ``(..., 3)``
+        Query points.  Against a batch of primitives, their leading
+        dimensions broadcast against the batch's like a NumPy ufunc:
+        ``(N, 3)`` against one shape, ``(N, 3)`` against ``N`` shapes
+        pairwise, ``(N, 1, 3)`` against ``M`` shapes for all pairs.  Against
+        a mesh, a scene or one shape, any ``(..., 3)``.  Rows containing NaN
+        or inf give NaN (feature ``Feature.NONE``) in those rows only.
+    method : str, keyword-only
+        One of ``shape.methods``.  ``"robust"`` (the default) is accurate
+        to a few units of rounding of the query's size on every finite
+        input; ``"certified"`` gives the distance within one unit in the
+        last place of the exact one, and the exact closest feature;
+        ``"eberly"`` (triangles, circles, disks and meshes) is Eberly's
+        algorithm as written, kept as a baseline.  The bounds are in
+        ``docs/accuracy.md``.
+    max_distance : float, optional, keyword-only
+        A cutoff: a point farther than it from the shape gets an infinite
+        distance, a NaN point, feature ``Feature.NONE`` and index ``-1``,
+        and the search skips what lies beyond it; the other rows are the
+        same bits as without it.  None (default): no cutoff.
 
     Returns
     -------
-    TriangleResult, DiskResult or CircleResult
-        Frozen result of arrays of the broadcast shape: ``distance``,
-        ``sqr_distance``, ``point``, ``feature`` and the shape's parameters.
+    Result
+        The shape's result type (``shape.result_type``): a frozen result of
+        arrays of the broadcast shape, with ``distance``, ``sqr_distance``,
+        ``point`` and ``feature``, and the shape's own fields (barycentric
+        coordinates for triangles, ``face`` for meshes, ``primitive`` for
+        scenes, ...): :class:`TriangleResult`, :class:`SegmentResult`,
+        :class:`PointResult`, :class:`DiskResult`, :class:`CircleResult`,
+        :class:`MeshResult` or :class:`SceneResult`.
 
     Examples
     --------
@@ -150,15 +186,39 @@ def closest_point(shape, points, *args, method=DEFAULT_METHOD):
             "closest_point() takes two positional arguments, shape and points; method is keyword-only: "
             f"closest_point(shape, points, method={args[0]!r})"
         )
-    return shape.closest_point(points, method=method)
+    return shape.closest_point(points, method=method, max_distance=max_distance)
 
 
-def distance(shape, points, *args, method=DEFAULT_METHOD):
+@keyword_only_signature
+def distance(
+    shape: Shape,
+    points: ArrayLike,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> Distances:
     """Distance from each of ``points`` to ``shape``.
 
-    Parameters and broadcasting are those of :func:`closest_point`; only the
-    distances are computed and returned, as an array of the broadcast shape
-    (a NumPy scalar for one point against one shape).
+    The function form of ``shape.distance(points, method=method)``: any
+    shape, points and method of :func:`closest_point` (a mesh, a scene, a
+    rounded shape, a batch of primitives), the distances alone computed.
+
+    Parameters
+    ----------
+    shape : Shape
+        As in :func:`closest_point`.
+    points : array_like, shape ``(..., 3)``
+        As in :func:`closest_point`.
+    method : str, keyword-only
+        As in :func:`closest_point`; default ``"robust"``.
+    max_distance : float, optional, keyword-only
+        As in :func:`closest_point`: ``inf`` beyond it.
+
+    Returns
+    -------
+    ndarray of float64, read-only
+        The distances, of the broadcast shape (a NumPy scalar for one point
+        against one shape); NaN where a point is not finite.
 
     Examples
     --------
@@ -176,13 +236,14 @@ def distance(shape, points, *args, method=DEFAULT_METHOD):
             "distance() takes two positional arguments, shape and points; method is keyword-only: "
             f"distance(shape, points, method={args[0]!r})"
         )
-    return shape.distance(points, method=method)
+    return shape.distance(points, method=method, max_distance=max_distance)
 
 
-def release_memory():
+def release_memory() -> int:
     """Give back to the system the memory kept for the outputs of later batches.
 
-    The outputs of a large batch (from 1 MB) are recycled: when every array of
+    The outputs of a large batch (from 1 MB), and the arrays of a refitted
+    mesh (:meth:`TriangleMesh.with_vertices`), are recycled: when every array of
     a dropped result is gone, its memory is kept, up to 256 MB in all, for the
     next batch of the same size, which then skips the operating system's
     slow first writes to fresh pages.  Memory is never reused while an array

@@ -21,6 +21,9 @@ kernel whose cache survives both:
 
 The directory is checked by creating a file, not by writing to it: on a
 full disk whose cache holds the kernels already, they are still read.
+
+The first kernel of a process that is not in the cache prints a line on
+stderr before it compiles (:mod:`proximity._notice`).
 """
 
 import os
@@ -29,6 +32,8 @@ import warnings
 
 from numba import njit
 from numba.misc.appdirs import user_cache_dir
+
+from . import _notice
 
 
 def _writable(directory):
@@ -90,8 +95,9 @@ def compiled(func, signature=(), **options):
 class _Guarded:
     """A dispatcher's Numba cache, whose faults fall back to compiling (see the module's docstring)."""
 
-    def __init__(self, cache):
+    def __init__(self, cache, func):
         self._cache = cache
+        self._func = func
 
     def __getattr__(self, name):
         return getattr(self._cache, name)
@@ -100,9 +106,12 @@ class _Guarded:
         # Whatever a damaged file raises, compiling again gives the right
         # kernel, and its save replaces the entry.
         try:
-            return self._cache.load_overload(sig, target_context)
+            loaded = self._cache.load_overload(sig, target_context)
         except Exception:
-            return None
+            loaded = None
+        if loaded is None:  # Numba compiles it next
+            _notice.compiling(self._func)
+        return loaded
 
     def save_overload(self, sig, data):
         global _saving
@@ -129,5 +138,5 @@ def _guard_numba_cache(dispatcher):
     cache = getattr(dispatcher, "_cache", None)
     if not all(callable(getattr(cache, name, None)) for name in ("load_overload", "save_overload", "flush")):
         return False
-    dispatcher._cache = _Guarded(cache)
+    dispatcher._cache = _Guarded(cache, dispatcher.py_func)
     return True

@@ -6,11 +6,23 @@ answer to the per-shape method.  The broad phase (:mod:`proximity.broadphase`) i
 chosen once, at construction.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from . import _lazy, _threads
-from ._validate import as_float64, frozen
+from ._typing import ArrayLike, Distances, Transform
+from ._validate import as_float64, cutoff, freeze_result, frozen
+from .primitives import N_PARAMS
+from .results import attach
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
+
+if TYPE_CHECKING:
+    from .inflated import Inflated
+    from .posed import Posed
+    from .results import Result
 
 BROAD_PHASES = ("auto", "brute", "bvh")
 
@@ -59,6 +71,9 @@ class Collection(Frozen):
     def __getstate__(self):
         state = super().__getstate__()
         tree = state.pop("_tree")
+        if tree is None:  # a scene of posed meshes alone: its instances have the trees
+            state["_tree"] = None
+            return state
         state["_hierarchy"] = {
             "index": tree.index,
             "child": tree.child,
@@ -73,6 +88,8 @@ class Collection(Frozen):
         super().__setstate__(state)
         if hierarchy is not None:  # else the state holds the tree itself
             object.__setattr__(self, "_tree", self._restore_tree(hierarchy))
+            if self._derived:  # derived from the tree too
+                self._init(**self._derive())
 
     def _restore_tree(self, hierarchy):
         broadphase = _lazy.load("proximity.broadphase")
@@ -89,19 +106,30 @@ class Collection(Frozen):
         with _threads.kernel():
             return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"])
 
-    def _query(self, points, method, full):
+    def _query(self, points, method, full, max_distance=None):
         method = check_method(method, self.methods)
+        limit = cutoff(max_distance)
         points = as_float64(points, "points", "(..., 3)")
         if points.ndim == 0 or points.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
         out_shape = points.shape[:-1]
         # A method's closest point may leave a primitive's box (``Method.loose``,
         # the seed's circle); the hierarchy then has looser boxes for it.
-        loose = self._tree.loose and method.loose
+        instanced = getattr(self, "_instanced", None)
+        trees = (self._tree,) if instanced is None else instanced.trees
+        loose = any(tree.loose for tree in trees) and method.loose
         with _threads.kernel():
             broadphase = _lazy.load("proximity.broadphase")
-            out = broadphase.nearest(self._tree, method, points.reshape(-1, 3), full, loose=loose)
-        if self._tree.radius >= 0:
+            flat = points.reshape(-1, 3)
+            if instanced is None:
+                out = broadphase.nearest(self._tree, method, flat, full, loose=loose, cutoff=limit)
+            else:
+                instances = _lazy.load("proximity.broadphase.instances")
+                arrays = instanced.arrays[loose]
+                out = instances.nearest_instances(
+                    trees, arrays, method, flat, full, loose=loose, cutoff=limit
+                )
+        if any(tree.radius >= 0 for tree in trees):
             self._rounded(out, points.reshape(-1, 3), full)
         return out_shape, out
 
@@ -109,7 +137,7 @@ class Collection(Frozen):
         """The search's answers for rounded primitives (signed ``d - r``) as a
         collection's: the distance ``max(d - r, 0)``, the signed one kept as
         ``signed_distance``, and closest points moved to the rounded surface."""
-        from ._rounding import surface_points
+        from ._rounding import outward, surface_directions, surface_points
 
         signed = out["distance"]
         distance = np.maximum(signed, 0.0) + 0.0
@@ -119,21 +147,49 @@ class Collection(Frozen):
         index = out["index"]
         found = index >= 0
         kinds, params = self._primitives(np.where(found, index, 0))
-        radius = np.where(found, params[:, self._tree.radius], np.nan)
+        radius = np.where(found, params[:, -1] if params.shape[1] > N_PARAMS else 0.0, np.nan)
         with np.errstate(invalid="ignore"):
             core = signed + radius
         rows_of = lambda rows: (kinds[rows], params[rows])  # noqa: E731
-        out["point"] = surface_points(points, out["point"], core, radius, rows_of)
+        on_core = out["point"]
+        out["point"] = surface_points(points, on_core, core, radius, rows_of)
         out["sqr_distance"] = distance * distance
+        # The normals, outwards on the rounded surfaces (the cores' directions where unrounded).
+        fallback = surface_directions(kinds, params)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            away = (points - out["point"]) / distance[:, None]
+        fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
+        out["normal"] = outward(out["point"], on_core, radius, fallback)
 
-    def inflated(self, radius):
+    def transformed(self, transform: Transform) -> Posed:
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
+
+    def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the collection's surface: a thick
         shell of a mesh, rounded primitives of a scene (:class:`proximity.Inflated`)."""
         from .inflated import Inflated
 
         return Inflated(self, radius)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the nearest primitive.
 
         Parameters
@@ -141,6 +197,11 @@ class Collection(Frozen):
         points : array_like, shape ``(..., 3)``
         method : str, keyword-only
             One of :attr:`methods`; default ``"robust"``.
+        max_distance : float, keyword-only, optional
+            A cutoff: rows with nothing within it get ``inf`` (and, in a
+            result, NaN points, feature ``NONE``, index -1); the search does
+            not look farther, which makes small cutoffs fast.  The rows within
+            it are answered as without it, bit for bit.
 
         Returns
         -------
@@ -156,10 +217,16 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "distance", args)
-        out_shape, out = self._query(points, method, full=False)
+        out_shape, out = self._query(points, method, full=False, max_distance=max_distance)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """Closest point, its distance and the nearest primitive, for each point.
 
         Parameters
@@ -169,6 +236,11 @@ class Collection(Frozen):
             ``NONE`` and index -1 in those rows only.
         method : str, keyword-only
             One of :attr:`methods`; default ``"robust"``.
+        max_distance : float, keyword-only, optional
+            A cutoff: rows with nothing within it get ``inf`` (and, in a
+            result, NaN points, feature ``NONE``, index -1); the search does
+            not look farther, which makes small cutoffs fast.  The rows within
+            it are answered as without it, bit for bit.
 
         Returns
         -------
@@ -186,12 +258,31 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "closest_point", args)
-        out_shape, out = self._query(points, method, full=True)
+        out_shape, out = self._query(points, method, full=True, max_distance=max_distance)
         out.pop("signed_distance", None)
+        normal = out.pop("normal", None)
         fields = {name: value.reshape(out_shape + value.shape[1:]) for name, value in out.items()}
-        return self._result(fields)
+        result = attach(self._result(fields), as_float64(points, "points", ""), None, self)
+        if normal is not None:
+            result.__dict__["_normal"] = freeze_result(normal.reshape(out_shape + (3,)))
+        return result
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD):
+    def _surface_normals(self, result, rows, members):
+        """The normals at the closest points of rows ``rows`` (on the
+        collection): its primitives' (:func:`proximity._rounding.surface_directions`)."""
+        from ._rounding import surface_directions
+
+        index = self._nearest_index(result).reshape(-1)[rows]
+        kinds, params = self._primitives(index)
+        return surface_directions(kinds, params)
+
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Signed distance to the nearest primitive: ``d - r`` for a rounded
         one, negative inside it (:class:`proximity.Inflated`); for the
         others, the distance.
@@ -205,5 +296,5 @@ class Collection(Frozen):
         """
         if args:
             raise keyword_only(self, "signed_distance", args)
-        out_shape, out = self._query(points, method, full=False)
+        out_shape, out = self._query(points, method, full=False, max_distance=max_distance)
         return out.get("signed_distance", out["distance"]).reshape(out_shape)[()]

@@ -10,7 +10,7 @@ def count(queries, exact):
     _STATS["exact"] += exact
 
 
-def stats(reset=False):
+def stats(reset: bool = False) -> dict[str, int]:
     """How often the certified method fell back to exact arithmetic.
 
     Parameters

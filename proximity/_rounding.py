@@ -105,3 +105,16 @@ def surface_directions(kinds, params):
         out[rows[good]] = n[good] / length[good]
     return out
 
+
+
+def outward(surface, core, radius, fallback):
+    """The outward unit normal of a rounded surface at ``surface``, a point
+    ``radius`` from its core's closest point ``core``: ``(surface - core) / r``,
+    normalised; ``fallback`` (the core's normals) where the radius is 0."""
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        v = surface - core
+        scale = np.max(np.abs(v), axis=-1, keepdims=True)
+        v = v / np.where(scale > 0, scale, 1.0)
+        n = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    r = np.broadcast_to(radius, n.shape[:-1])[..., None]
+    return np.where(r > 0, n, fallback)

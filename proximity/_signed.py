@@ -15,14 +15,9 @@ Two tests, used together:
   the feature gives the same product, as ``C - V`` runs along the feature
   and ``N`` is normal to it, and ``P - V`` is computed more accurately than
   ``P - C``.
-* The **generalized winding number** (A. Jacobson, L. Kavan and O.
-  Sorkine-Hornung, *Robust inside-outside segmentation using generalized
-  winding numbers*, ACM TOG 32(4), 2013): the sum of the solid angles of
-  the faces seen from ``P`` (A. van Oosterom and J. Strackee's formula),
-  over ``4 pi``; 1 inside a closed surface, 0 outside, and a smooth
-  measure in between on surfaces with holes.  It costs O(F) per point here
-  (every face; a hierarchy with far-field approximations, as in Barill et
-  al.'s fast winding numbers, is not built).
+* The **winding number** (:mod:`proximity.winding`): exact signed ray
+  crossings on a closed mesh, and a hierarchy of far-field series with a
+  rigorous bound on any mesh; inside means nonzero (``|w| > 1/2``).
 
 The pseudonormal decides every point whose product clears its margin of
 rounding errors (see :func:`inside`); the winding number decides the rest:
@@ -31,7 +26,10 @@ whose closest feature touches a degenerate face (zero area), whose normal
 is undefined and whose neighbours' normals do not describe the surface
 there.  Faces whose vertex indices repeat (a collapsed face) are left out
 of the surface's topology and normals altogether: the faces around them
-close the surface without them.
+close the surface without them.  The tables are built on the mesh's faces
+with coincident vertices merged (:func:`proximity._topology.merged_faces`),
+and are used only where :mod:`proximity.validity` finds that the mesh
+bounds a solid (flipped where its faces point inwards).
 """
 
 import numba
@@ -79,17 +77,15 @@ class Signs:
         n_vertices = len(vertices)
         start = faces.reshape(-1)  # side 3 f + k runs from vertex k of face f to the next
         end = faces[:, [1, 2, 0]].reshape(-1)
-        collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
-        live = np.flatnonzero(~np.repeat(collapsed, 3))
-        key = start[live] * n_vertices + end[live]
-        order = np.argsort(key, kind="stable")
-        keys, sorted_sides = key[order], live[order]
-        twin, self.reason = _twins(keys, sorted_sides, live, start, end, n_vertices)
+        twin, collapsed, self.reason = edge_twins(faces, n_vertices)
         self.closed = self.reason is None
         self.table = self.edge_row = self.longest = None
         if self.closed:
+            live = np.flatnonzero(~np.repeat(collapsed, 3))
+            key = start[live] * n_vertices + end[live]
+            order = np.argsort(key, kind="stable")
             self._normals(vertices, faces, collapsed, twin)
-            self._redirect(collapsed, start, end, keys, sorted_sides, n_vertices)
+            self._redirect(collapsed, start, end, key[order], live[order], n_vertices)
 
     def _normals(self, vertices, faces, collapsed, twin):
         n_vertices, n_faces = len(vertices), len(faces)
@@ -158,16 +154,28 @@ class Signs:
         self.edge_row = edge_row
 
 
-def _twins(keys, sorted_sides, live, start, end, n_vertices):
-    """``(twin side of each side or -1, reason the surface is not closed or None)``."""
+def edge_twins(faces, n_vertices):
+    """``(twin side of each side or -1, collapsed faces, reason the surface is not closed or None)``.
+
+    Side ``3 f + k`` runs from vertex ``k`` of face ``f`` to the next; faces
+    with a repeated vertex index (collapsed) have no sides here.  Closed:
+    every side has exactly one twin, the same edge run the other way.
+    """
+    start = faces.reshape(-1)
+    end = faces[:, [1, 2, 0]].reshape(-1)
+    collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    live = np.flatnonzero(~np.repeat(collapsed, 3))
+    key = start[live] * n_vertices + end[live]
+    order = np.argsort(key, kind="stable")
+    keys, sorted_sides = key[order], live[order]
     twin = np.full(len(start), -1, dtype=np.int64)
     if len(keys) == 0:
-        return twin, None
+        return twin, collapsed, None
     repeated = np.flatnonzero(keys[1:] == keys[:-1])
     if len(repeated):
         first, second = sorted_sides[repeated[0]], sorted_sides[repeated[0] + 1]
         a, b = int(start[first]), int(end[first])
-        return twin, (
+        return twin, collapsed, (
             f"faces {first // 3} and {second // 3} both run edge ({a}, {b}) from {a} to {b}: more than two "
             "faces meet there, or the faces' orientations disagree"
         )
@@ -177,12 +185,12 @@ def _twins(keys, sorted_sides, live, start, end, n_vertices):
     if len(missing):
         side = live[missing[0]]
         a, b = int(start[side]), int(end[side])
-        return twin, (
+        return twin, collapsed, (
             f"edge ({a}, {b}) of face {side // 3} has no face running it from {b} to {a}: the surface has a "
             "boundary there (a hole), or the face on the other side has the opposite orientation"
         )
     twin[live] = sorted_sides[at]
-    return twin, None
+    return twin, collapsed, None
 
 
 def feature_rows(signs, faces, face, feature):
@@ -200,21 +208,24 @@ def feature_rows(signs, faces, face, feature):
     return row, anchor
 
 
-def inside(signs, vertices, faces, points, face, feature, distance):
-    """Whether each point is inside the closed mesh.
+def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding):
+    """``(inside, certain)``: whether each point is inside the closed mesh, and proven so.
 
     ``face``, ``feature`` and ``distance`` are the query's answer for
-    ``points`` (``(n, 3)``).  The pseudonormal ``N`` of the closest feature
-    decides where ``|(P - V) . N|`` exceeds its bound of error:
-    ``E |P - V| + MARGIN (|P - V| + L)``, with ``E`` the bound on ``N``'s
-    direction and ``L`` the face's longest edge; the winding number decides
-    the other points at a positive distance.  Rows at distance 0 or NaN
-    are False.
+    ``points`` (``(n, 3)``); ``faces`` the faces the tables were built on.
+    The pseudonormal ``N`` of the closest feature decides where
+    ``|(P - V) . N|`` exceeds its bound of error: ``E |P - V| + MARGIN (|P -
+    V| + L)``, with ``E`` the bound on ``N``'s direction and ``L`` the face's
+    longest edge; inside is ``(P - V) . N < 0``, or ``> 0`` where ``flip``
+    (a solid whose faces point inwards).  ``winding(points, distance)``
+    decides the other points at a positive distance, returning ``(inside,
+    certain)``.  Rows at distance 0 or NaN are False in both.
     """
     out = np.zeros(len(points), dtype=bool)
+    certain = np.zeros(len(points), dtype=bool)
     rows = np.flatnonzero(distance > 0)
     if len(rows) == 0:
-        return out
+        return out, certain
     f = face[rows]
     row, anchor = feature_rows(signs, faces, f, feature[rows])
     normal = signs.table[row]
@@ -224,15 +235,18 @@ def inside(signs, vertices, faces, points, face, feature, distance):
     with np.errstate(invalid="ignore"):  # inf * 0 where the point is on the anchor: undecided
         bound = normal[:, 3] * reach + MARGIN * (reach + signs.longest[f])
         decided = np.abs(dot) > bound
-    out[rows[decided]] = dot[decided] < 0.0
+    out[rows[decided]] = (dot[decided] > 0.0) if flip else (dot[decided] < 0.0)
+    certain[rows[decided]] = True
     undecided = rows[~decided]
     if len(undecided):
-        out[undecided] = winding_numbers(vertices, faces, points[undecided]) > 0.5
-    return out
+        out[undecided], certain[undecided] = winding(points[undecided], distance[undecided])
+    return out, certain
 
 
 def winding_numbers(vertices, faces, points):
-    """The generalized winding number of the mesh at each point, ``(n,)``: every face's solid angle."""
+    """The generalized winding number of the mesh at each point, ``(n,)``: every face's solid
+    angle, summed in floats without a bound (a reference for tests; the queries use
+    :mod:`proximity.winding`)."""
     from ._jit import kernel
 
     global _winding_kernel

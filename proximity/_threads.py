@@ -18,6 +18,8 @@ asked for is ``forksafe``: ``tbb`` where it can be loaded, else
 ``workqueue`` on Linux and ``omp`` elsewhere.
 """
 
+from __future__ import annotations
+
 import contextlib
 import ctypes
 import operator
@@ -25,6 +27,7 @@ import os
 import site
 import sys
 import threading
+from contextlib import AbstractContextManager
 
 from . import _lazy
 
@@ -109,7 +112,7 @@ def default_threads():
 
 
 @contextlib.contextmanager
-def threads(n=None):
+def threads(n: int | None = None) -> AbstractContextManager[None]:
     """Run the queries of the enclosed block on ``n`` threads.
 
     Parameters

@@ -1,10 +1,25 @@
 """Validation at the boundary: every check happens here, never in a kernel."""
 
 import dataclasses
+import inspect
+import math
 
 import numpy as np
 
 _REAL = frozenset("iuf")
+
+
+def keyword_only_signature(func):
+    """``func``, its signature shown without its ``*args``.
+
+    The public queries take ``*args`` only to answer ``method`` passed by
+    position with a message saying it is keyword-only; ``help()`` and the
+    documentation show what they accept: ``(shape, points, *, method=...)``.
+    """
+    signature = inspect.signature(func)
+    kept = [p for p in signature.parameters.values() if p.kind is not p.VAR_POSITIONAL]
+    func.__signature__ = signature.replace(parameters=kept)
+    return func
 
 
 def as_array(value, name, expected, dtype=None):
@@ -14,6 +29,28 @@ def as_array(value, name, expected, dtype=None):
         return np.asarray(value, dtype=dtype)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be an array of shape {expected}; got {value!r} ({exc})") from None
+
+
+def as_index_array(value, name, expected):
+    """``value`` as an integer array, or a ValueError naming ``name``.
+
+    Floats are taken where every one is a whole number (a face list read by
+    ``np.loadtxt``, which reads floats); others are refused with the first
+    that is not, and booleans and other dtypes are refused.
+    """
+    array = as_array(value, name, expected)
+    if array.dtype.kind in "iu":
+        return array
+    if array.dtype.kind == "f":
+        whole = np.isfinite(array) & (array == np.round(array)) & (np.abs(array) < 2.0**63)
+        if whole.all():
+            return array.astype(np.int64)
+        index = tuple(int(i) for i in np.argwhere(~whole)[0])
+        raise ValueError(
+            f"{name} must be integers, an array of shape {expected}; got {array[index]} at index "
+            f"{index} of a {array.dtype} array, not a whole number"
+        )
+    raise ValueError(f"{name} must be an integer array of shape {expected}; got dtype {array.dtype}")
 
 
 def _real(value, name, expected):
@@ -146,6 +183,19 @@ def freeze_fields(state):
         if isinstance(value, np.ndarray):
             value = freeze_result(value)
         elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-            value = dataclasses.replace(value, **freeze_fields(vars(value)))
+            fields = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+            value = dataclasses.replace(value, **freeze_fields(fields))
         frozen_state[name] = value
     return frozen_state
+
+
+def cutoff(max_distance):
+    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it."""
+    if max_distance is None:
+        return math.inf
+    if isinstance(max_distance, bool) or not isinstance(max_distance, (int, float, np.integer, np.floating)):
+        raise TypeError(f"max_distance must be a number or None; got {type(max_distance).__name__}")
+    value = float(max_distance)
+    if not value >= 0.0:  # NaN as well
+        raise ValueError(f"max_distance must be >= 0 (or None); got {max_distance!r}")
+    return value

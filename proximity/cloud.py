@@ -2,8 +2,9 @@
 
 ::
 
-    python -m proximity.cloud MESH POINTS -o OUT [--method M] [--closest-points] [--faces]
-                              [--chunk N] [--scheduler ADDRESS | --workers N]
+    python -m proximity.cloud MESH POINTS -o OUT [--method M] [--signed [--sign S]]
+                              [--closest-points] [--faces] [--chunk N]
+                              [--scheduler ADDRESS | --workers N]
 
 ``MESH`` is any mesh trimesh reads (STL, OBJ, PLY, ...).  ``POINTS`` is an
 ``(N, 3)`` array: a ``.npy`` file (memory-mapped, never read whole), a
@@ -14,6 +15,18 @@ with zarr installed).  ``OUT`` is a ``.npy`` file or a ``.zarr`` directory:
   ``--faces``, records with the fields ``distance``, ``point`` (3 floats)
   and ``face`` (int64, -1 where there is no answer), as asked;
 - ``.zarr``: a group holding one array per field, chunked like the job.
+
+With ``--signed`` the distances are signed, negative inside the mesh (the
+field is then named ``signed_distance``), as
+:meth:`proximity.TriangleMesh.signed_distance` gives them; ``--sign``
+chooses how inside is told from outside: ``pseudonormal`` (the default;
+closed meshes only) or ``winding`` (any mesh, slower), and implies
+``--signed``.
+
+Progress goes to stderr: a bar on a terminal, and where stderr is not one
+(a pipe, a CI log, ``nohup``) a plain line every ten seconds or so; a last
+line sums up the job.  ``--no-progress`` leaves only that line and the
+warnings.
 
 The job runs chunk by chunk (``--chunk`` rows at a time), so its memory is
 bounded by the chunk, not by ``N``.  By default it runs in this process, on
@@ -48,7 +61,9 @@ import numpy as np
 
 NAME = "proximity.cloud"
 CHUNK = 1_000_000
-INSTALL = "pip install 'proximity3d[scale]'"
+INSTALL = "pip install '.[scale]' in proximity's clone"
+#: Seconds between progress lines where stderr is not a terminal.
+LOG_EVERY = 10.0
 
 
 class InputError(Exception):
@@ -96,8 +111,14 @@ def _ply_vertices(path):
     return None
 
 
-def read_mesh(path):
-    """The ``TriangleMesh`` of the mesh file at ``path``."""
+def read_mesh(path, merge=False):
+    """The ``TriangleMesh`` of the mesh file at ``path``.
+
+    With ``merge``, vertices of exactly the same coordinates are made one
+    (an STL file repeats every vertex in each face that uses it), so that
+    faces that meet share their edges, as the pseudonormal sign needs; the
+    faces keep their order, and the surface is the same.
+    """
     import proximity
 
     path = Path(path)
@@ -111,8 +132,12 @@ def read_mesh(path):
     faces = getattr(loaded, "faces", None)
     if faces is None or len(faces) == 0:
         raise InputError(f"MESH {str(path)!r} holds no faces (an empty or truncated file, or a point cloud?)")
+    vertices, faces = np.asarray(loaded.vertices), np.asarray(faces)
+    if merge and len(vertices):
+        vertices, index = np.unique(vertices, axis=0, return_inverse=True)
+        faces = index.reshape(-1)[faces]
     try:
-        return proximity.TriangleMesh(np.asarray(loaded.vertices), np.asarray(faces))
+        return proximity.TriangleMesh(vertices, faces)
     except ValueError as exc:
         raise InputError(f"MESH {str(path)!r}: {exc}") from None
 
@@ -204,8 +229,9 @@ class Points:
 # --- Output --------------------------------------------------------------------------------------
 
 
-def _fields(closest_points, faces):
-    names = ["distance"] + (["point"] if closest_points else []) + (["face"] if faces else [])
+def _fields(closest_points, faces, signed=False):
+    names = ["signed_distance" if signed else "distance"]
+    names += (["point"] if closest_points else []) + (["face"] if faces else [])
     return np.dtype([(n, {"point": ("f8", (3,)), "face": "i8"}.get(n, "f8")) for n in names])
 
 
@@ -272,7 +298,7 @@ class Output:
         self._remove(self.partial)
         if self.kind == "npy":
             # Distances alone as a plain array; more fields as records.
-            stored = np.dtype(np.float64) if self.dtype.names == ("distance",) else self.dtype
+            stored = self.dtype[0] if len(self.dtype.names) == 1 else self.dtype
             header = {"descr": np.lib.format.dtype_to_descr(stored), "fortran_order": False, "shape": (n,)}
             with open(self.partial, "wb") as f:
                 np.lib.format.write_array_header_1_0(f, header)
@@ -304,7 +330,7 @@ class Output:
             if self.kind == "npy":
                 # Written through the file rather than a memory map, whose
                 # writes to a full disk kill the process (SIGBUS).
-                rows = table if self.dtype.names != ("distance",) else table["distance"]
+                rows = table if len(self.dtype.names) > 1 else table[self.dtype.names[0]]
                 rows = np.ascontiguousarray(rows)
                 with open(self.partial, "r+b") as f:
                     f.seek(self._offset + start * rows.itemsize)
@@ -330,6 +356,7 @@ class Output:
             raise self._error(exc) from None
 
     def discard(self):
+        """Remove the partial output, after a failure."""
         try:
             self._remove(self.partial)
         except OSError:
@@ -354,45 +381,47 @@ def _write_block(table, output, block_info=None):
     """Dask task: write one chunk of records; ``[[rows, NaN distances]]``."""
     start = block_info[0]["array-location"][0][0]
     output.write(start, table)
-    return np.array([[len(table), int(np.isnan(table["distance"]).sum())]], np.int64)
+    return np.array([[len(table), int(np.isnan(table[table.dtype.names[0]]).sum())]], np.int64)
 
 
-def _query(mesh, block, method, dtype):
-    """The records of ``block``."""
-    out = np.empty(len(block), dtype)
-    if dtype.names == ("distance",):
-        out["distance"] = mesh.distance(block, method=method)
-        return out
-    r = mesh.closest_point(block, method=method)
-    for name in dtype.names:
-        out[name] = getattr(r, name)
-    return out
+def _query(mesh, block, method, dtype, sign):
+    """The records of ``block``, as :func:`proximity.dask.records` makes them."""
+    from .dask import _records_block
+
+    return _records_block(block, mesh, method, None, None, dtype, sign)
 
 
 # --- Progress ------------------------------------------------------------------------------------
 
 
 class _Line:
-    """A progress line on stderr, for when tqdm is not installed."""
+    """Progress on stderr without tqdm: one line redrawn on a terminal, else
+    a plain line every :data:`LOG_EVERY` seconds and at the end, for logs."""
 
-    def __init__(self, total):
-        self.total, self.done, self.start, self.last = total, 0, time.perf_counter(), 0.0
-        self.tty = sys.stderr.isatty()
+    def __init__(self, total, tty):
+        self.total, self.done, self.start, self.last = total, 0, time.perf_counter(), None
+        self.tty = tty
 
     def update(self, n):
         self.done += n
         now = time.perf_counter()
-        if now - self.last < (0.2 if self.tty else 5.0) and self.done < self.total:
+        if self.last is None:
+            self.last = self.start
+        if now - self.last < (0.2 if self.tty else LOG_EVERY) and self.done < self.total:
             return
         self.last = now
-        rate = self.done / max(now - self.start, 1e-9)
+        elapsed = max(now - self.start, 1e-9)
+        rate = self.done / elapsed
         share = 100 * self.done / max(self.total, 1)
-        text = f"{NAME}: {self.done:,}/{self.total:,} points ({share:.0f}%, {rate:,.0f} points/s)"
+        text = f"{NAME}: {self.done:,}/{self.total:,} points ({share:.0f}%, {rate:,.0f} points/s"
+        if self.done < self.total and rate > 0:
+            text += f", about {_duration((self.total - self.done) / rate)} left"
+        text += ")"
         sys.stderr.write(("\r" + text) if self.tty else (text + "\n"))
         sys.stderr.flush()
 
     def close(self):
-        if self.tty:
+        if self.tty and self.done:
             sys.stderr.write("\n")
 
 
@@ -405,20 +434,35 @@ class _Quiet:
 
 
 def _progress(total, show):
+    """The progress display: ``show`` is True (a bar on a terminal, log lines
+    elsewhere) or False (none)."""
     if not show:
         return _Quiet()
+    tty = sys.stderr.isatty()
+    if not tty:
+        return _Line(total, tty=False)
     try:
         from tqdm import tqdm
     except ImportError:
-        return _Line(total)
+        return _Line(total, tty=True)
     return tqdm(total=total, unit="points", unit_scale=True, desc=NAME, file=sys.stderr)
+
+
+def _duration(seconds):
+    """``"42 s"``, ``"3 min 5 s"``, ``"2 h 10 min"``."""
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f"{seconds} s"
+    if seconds < 3600:
+        return f"{seconds // 60} min {seconds % 60} s"
+    return f"{seconds // 3600} h {seconds % 3600 // 60} min"
 
 
 # --- Running -------------------------------------------------------------------------------------
 
 
 def peak_rss():
-    """This process's peak resident memory, in bytes (None where not known)."""
+    """Peak resident memory of this process, in bytes (None where not known)."""
     try:
         import resource
     except ImportError:  # Windows
@@ -427,22 +471,23 @@ def peak_rss():
     return peak if sys.platform == "darwin" else peak * 1024
 
 
-def run_local(mesh, points, output, chunk, method, threads, bar):
+def run_local(mesh, points, output, chunk, method, threads, bar, sign=None):
     """The embedded default: a loop over chunks in this process; the NaN count."""
     import proximity
 
     nan = 0
+    first = output.dtype.names[0]
     with proximity.threads(threads):
         for start in range(0, len(points), chunk):
             block = points[start : start + chunk]
-            table = _query(mesh, block, method, output.dtype)
+            table = _query(mesh, block, method, output.dtype, sign)
             output.write(start, table)
-            nan += int(np.isnan(table["distance"]).sum())
+            nan += int(np.isnan(table[first]).sum())
             bar.update(len(block))
     return nan
 
 
-def run_dask(client, mesh, points, output, chunk, method, threads, bar):
+def run_dask(client, mesh, points, output, chunk, method, threads, bar, sign=None):
     """The job on a Dask cluster: one task per chunk reads, queries and writes it."""
     import dask.array as da
     from distributed import as_completed
@@ -450,7 +495,9 @@ def run_dask(client, mesh, points, output, chunk, method, threads, bar):
     import proximity.dask
 
     array = da.from_array(points, chunks=(chunk, 3), lock=False, asarray=False, meta=np.empty((0, 3)))
-    table = proximity.dask.records(mesh, array, method=method, threads=threads, fields=output.dtype.names)
+    table = proximity.dask.records(
+        mesh, array, method=method, threads=threads, fields=output.dtype.names, sign=sign
+    )
     written = table.map_blocks(
         _write_block,
         output,
@@ -476,18 +523,29 @@ def _worker_peak_rss():
     return peak_rss()
 
 
-def parse(argv):
+def parser():
+    """The command's argument parser."""
+    from .mesh import SIGNS
     from .methods import REGISTRY
 
     parser = argparse.ArgumentParser(
         prog=f"python -m {NAME}",
-        description="Distances (and optionally closest points and faces) from the points of a file "
-        "to a mesh, chunk by chunk, in this process or on a Dask cluster.",
+        description="Distances, signed or not (and optionally closest points and faces) from the points "
+        "of a file to a mesh, chunk by chunk, in this process or on a Dask cluster.",
     )
     parser.add_argument("mesh", metavar="MESH", help="a mesh file trimesh reads (STL, OBJ, PLY, ...)")
     parser.add_argument("points", metavar="POINTS", help="(N, 3) points: .npy, .ply, or a zarr array")
     parser.add_argument("-o", "--out", metavar="OUT", required=True, help="a .npy file or a .zarr directory")
     parser.add_argument("--method", default="robust", choices=list(REGISTRY), help="default: robust")
+    parser.add_argument(
+        "--signed", action="store_true", help="signed distances, negative inside the mesh (see --sign)"
+    )
+    parser.add_argument(
+        "--sign",
+        choices=SIGNS,
+        help="how inside is told from outside (implies --signed): pseudonormal (default; closed meshes) "
+        "or winding (any mesh, slower)",
+    )
     parser.add_argument("--closest-points", action="store_true", help="also write the closest points")
     parser.add_argument("--faces", action="store_true", help="also write the index of the nearest face")
     parser.add_argument(
@@ -500,18 +558,62 @@ def parse(argv):
         "--threads", type=int, metavar="N", help="Numba threads per chunk (default: cores per running chunk)"
     )
     parser.add_argument(
-        "--progress", action="store_true", default=None, help="show progress even if not a TTY"
+        "--progress",
+        action="store_true",
+        default=True,
+        help="show progress (the default): a bar on a terminal, else a line every few seconds",
     )
-    parser.add_argument("--no-progress", dest="progress", action="store_false", help="never show progress")
+    parser.add_argument(
+        "--no-progress", dest="progress", action="store_false", help="no progress; the last line stays"
+    )
     parser.add_argument("--summary", metavar="FILE", help="write timings and peak memory as JSON to FILE")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def parse(argv):
+    """The command's arguments, checked."""
+    from .mesh import SIGNS
+
+    command = parser()
+    args = command.parse_args(argv)
+    if args.sign is not None:
+        args.signed = True
+    elif args.signed:
+        args.sign = SIGNS[0]
     if args.chunk < 1:
-        parser.error(f"--chunk must be at least 1; got {args.chunk}")
+        command.error(f"--chunk must be at least 1; got {args.chunk}")
     if args.workers is not None and args.workers < 1:
-        parser.error(f"--workers must be at least 1; got {args.workers}")
+        command.error(f"--workers must be at least 1; got {args.workers}")
     if args.threads is not None and args.threads < 1:
-        parser.error(f"--threads must be at least 1; got {args.threads}")
+        command.error(f"--threads must be at least 1; got {args.threads}")
     return args
+
+
+def _check_sign(mesh, args):
+    """Raise :class:`InputError` where ``--sign pseudonormal`` cannot sign this mesh (it is not closed)."""
+    try:
+        mesh.signed_distance(np.zeros((0, 3)), sign=args.sign)
+    except ValueError as exc:
+        raise InputError(f"MESH {args.mesh!r}: {exc}: pass --sign winding") from None
+
+
+_WRITTEN = {
+    "distance": "distances",
+    "signed_distance": "signed distances",
+    "point": "closest points",
+    "face": "nearest faces",
+}
+
+
+def _summary_line(args, n, fields, seconds, query):
+    """The last line: what was written, how many points, how fast."""
+    what = ", ".join(_WRITTEN[name] for name in fields.names)
+    rate = n / query if query > 0 else float("inf")
+    sign = f", sign {args.sign}" if args.signed else ""
+    return (
+        f"{NAME}: wrote {what} of {n:,} points to {args.out} in {_duration(seconds)} "
+        f"({rate:,.0f} points/s; method {args.method}{sign})"
+    )
 
 
 def _terminate(signum, frame):
@@ -519,20 +621,22 @@ def _terminate(signum, frame):
 
 
 def main(argv=None):
+    """Run ``python -m proximity.cloud``; returns its exit status."""
     args = parse(argv)
-    show = sys.stderr.isatty() if args.progress is None else args.progress
     started = time.perf_counter()
     output = None
     client = cluster = None
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         try:
-            mesh = read_mesh(args.mesh)
+            mesh = read_mesh(args.mesh, merge=args.signed)
             points = Points(args.points)
             inputs = [("MESH", args.mesh), ("POINTS", args.points)]
             if args.summary:
                 check_not_an_input("--summary", args.summary, inputs)
-            fields = _fields(args.closest_points, args.faces)
+            fields = _fields(args.closest_points, args.faces, args.signed)
+            if args.signed:
+                _check_sign(mesh, args)
             output = Output(args.out, len(points), fields, args.chunk, inputs)
         except (InputError, OutputError) as exc:
             print(f"{NAME}: error: {exc}", file=sys.stderr)
@@ -556,14 +660,12 @@ def main(argv=None):
                     n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=":0"
                 )
             client = Client(args.scheduler or cluster)
-        bar = _progress(len(points), show)
+        bar = _progress(len(points), args.progress)
         query_start = time.perf_counter()
+        job = (mesh, points, output, args.chunk, args.method, args.threads, bar, args.sign)
         try:
             try:
-                if client is None:
-                    nan = run_local(mesh, points, output, args.chunk, args.method, args.threads, bar)
-                else:
-                    nan = run_dask(client, mesh, points, output, args.chunk, args.method, args.threads, bar)
+                nan = run_local(*job) if client is None else run_dask(client, *job)
             finally:
                 bar.close()
             query = time.perf_counter() - query_start
@@ -572,6 +674,7 @@ def main(argv=None):
             print(f"{NAME}: error: {exc}", file=sys.stderr)
             return 2
         output = None
+        print(_summary_line(args, len(points), fields, time.perf_counter() - started, query), file=sys.stderr)
         if nan:
             print(
                 f"{NAME}: warning: {nan:,} of {len(points):,} rows of POINTS {args.points!r} "
@@ -584,6 +687,7 @@ def main(argv=None):
                 "points": len(points),
                 "chunk": args.chunk,
                 "method": args.method,
+                "sign": args.sign,
                 "where": args.scheduler
                 or (f"LocalCluster({args.workers})" if args.workers else "in-process"),
                 "seconds": time.perf_counter() - started,

@@ -6,6 +6,11 @@ should answer their first query at once run this command after installing,
 where the cache is writable, to compile every method of every shape and
 path.  It prints each kernel as it is done.
 
+Without it, the first query of a process that finds a kernel missing from
+the cache prints one line on stderr saying what it compiles and roughly how
+long that takes; ``PROXIMITY_QUIET=1`` in the environment silences it (see
+:mod:`proximity._notice`).
+
 Examples
 --------
 >>> import proximity.compile
@@ -59,9 +64,8 @@ def _jobs(method):
 
 
 def _broad_phase():
-    """The hierarchy's build, refit, visiting order and candidate search, on a small mesh."""
-    from .broadphase import _alloc, build, traverse
-    from .broadphase.nearest import _morton_order
+    """The hierarchy's build, refits and candidate search, on a small mesh."""
+    from .broadphase import _alloc, build, refit, traverse
 
     rng = np.random.default_rng(0)
     width = primitives.N_PARAMS
@@ -72,22 +76,30 @@ def _broad_phase():
     _alloc._empty(1, 1)
     readonly = _alloc.readonly
     _alloc._take_rows(readonly(params, np.float64), readonly([1, 0], np.int64), np.empty((2, width)))
-    vertices, faces = readonly(params[:, :3], np.float64), readonly([[0, 1, 2]], np.int64)
-    build.build_faces(vertices, faces, 0)
+    # Enough faces for a tree of more than one leaf, which the refit fits.
+    vertices = readonly(params[:, :3], np.float64)
+    faces = readonly([[k, (k + 1) % 8, (k + 3) % 8] for k in range(8)], np.int64)
+    built = build.build_faces(vertices, faces, 0)
+    refit.refit_faces(vertices, faces, built.index, built.child, built.count, built.kinds)
+    # And a tree of one leaf, whose rows are gathered alone.
+    built = build.build_faces(vertices, faces[:2], 0)
+    refit.refit_faces(vertices, faces[:2], built.index, built.child, built.count, built.kinds)
     points = readonly(rng.random((2, 3)), np.float64)
-    _morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     traverse._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)
 
 
 def _winding():
-    """The winding number of the signed distance, for a mesh's read-only arrays."""
-    from . import _signed
+    """The signs of the signed distance: the winding number's hierarchy, series and ray
+    crossings, and the validity check (its predicates and pair tests)."""
     from .mesh import TriangleMesh
 
-    mesh = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
-    _signed.winding_numbers(mesh.vertices, mesh.faces, np.zeros((1, 3)))
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    tetrahedron = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], faces)
+    tetrahedron.signed_distance(np.zeros((1, 3)) + 0.1)
+    tetrahedron.signed_distance(np.zeros((1, 3)) + 0.1, sign="winding")
+    TriangleMesh(tetrahedron.vertices, faces[1:]).winding_number(np.zeros((1, 3)) + 0.1)
 
 
 def _round_frames():
@@ -117,7 +129,7 @@ def compile_all(methods=None, log=sys.stdout):
     names = list(_methods.REGISTRY) if methods is None else list(methods)
     jobs = [job for name in names for job in _jobs(name)]
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
-    jobs.append(("mesh: winding number of the signed distance", _winding))
+    jobs.append(("mesh: the signs of the signed distance", _winding))
     jobs.append(("circles and disks: unit normals of large batches", _round_frames))
     done = {}
     for k, (description, job) in enumerate(jobs, 1):
@@ -129,7 +141,8 @@ def compile_all(methods=None, log=sys.stdout):
     return done
 
 
-def main(argv=None):
+def parser():
+    """The command's argument parser."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.compile",
         description="Compile proximity's kernels into the disk cache, so that first queries start at once.",
@@ -140,7 +153,12 @@ def main(argv=None):
         choices=list(_methods.REGISTRY),
         help="compile only this method (repeatable); default: every method",
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None):
+    """Run ``python -m proximity.compile``; returns its exit status."""
+    args = parser().parse_args(argv)
     from . import _cache
 
     if not _cache.CACHE:

@@ -24,8 +24,8 @@ whole process, and concurrent queries share them.  With Dask's
 ``processes`` scheduler, or with Numba's OpenMP layer, pass ``threads``:
 the cores divided by the tasks that run at once.
 
-Dask is imported when a function is called: ``pip install
-'proximity3d[scale]'`` installs it.
+Dask is imported when a function is called: ``pip install '.[scale]'``
+in proximity's clone installs it.
 """
 
 import collections
@@ -37,12 +37,13 @@ import numpy as np
 
 from . import _threads, primitives
 from ._validate import as_array
-from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult
+from .mesh import TriangleMesh
+from .results import CircleResult, DiskResult, MeshResult, SceneResult, TriangleResult, asdict
 from .shapes import DEFAULT_METHOD, Frozen, check_method
 
 __all__ = ["closest_point", "distance", "records"]
 
-INSTALL = "pip install 'proximity3d[scale]'"
+INSTALL = "pip install '.[scale]' in proximity's clone"
 
 #: Rows per chunk when ``points`` is a NumPy array: 24 MB of float64 points.
 CHUNK_ROWS = 1_000_000
@@ -179,12 +180,18 @@ def _distance_block(block, shape, method, threads, per_host):
         return np.asarray(shape.distance(block, method=method))
 
 
-def _records_block(block, shape, method, threads, per_host, dtype):
+def _records_block(block, shape, method, threads, per_host, dtype, sign=None):
+    names = [name for name in dtype.names if name != "signed_distance"]
     with _threads.threads(task_threads(threads, per_host)):
-        if dtype.names == ("distance",):
+        if names == ["distance"]:
             result = {"distance": shape.distance(block, method=method)}
+        elif names:
+            result = asdict(shape.closest_point(block, method=method))
         else:
-            result = vars(shape.closest_point(block, method=method))
+            result = {}
+        if len(names) < len(dtype.names):
+            options = {} if sign is None else {"sign": sign}
+            result["signed_distance"] = shape.signed_distance(block, method=method, **options)
     out = np.empty(len(block), dtype)
     for name in dtype.names:
         out[name] = result[name]
@@ -275,12 +282,15 @@ def distance(shape, points, *, method=DEFAULT_METHOD, threads=None):
     )
 
 
-def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
+def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None, sign=None):
     """The closest-point fields of each point, as one dask array of records.
 
     Parameters are those of :func:`closest_point`; ``fields`` (a sequence of
     names of the shape's result, default all) chooses the fields kept.
-    Asking for ``("distance",)`` alone runs the distance query.
+    Asking for ``("distance",)`` alone runs the distance query.  For shapes
+    with a ``signed_distance`` method (meshes, rounded shapes), the field
+    ``"signed_distance"`` may be asked for too, with ``sign`` (a mesh's
+    ``sign=`` option, see :meth:`proximity.TriangleMesh.signed_distance`).
 
     Returns
     -------
@@ -301,6 +311,11 @@ def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
     threads = _check(shape, threads)
     check_method(method, shape.methods)
     names = [f.name for f in dataclasses.fields(_result_type(shape))]
+    signed = callable(getattr(shape, "signed_distance", None))
+    if signed:
+        names.append("signed_distance")
+    if sign is not None and not isinstance(shape, TriangleMesh):
+        raise TypeError(f"sign is an option of meshes; got a {type(shape).__name__}")
     if fields is not None:
         try:
             fields = [fields] if isinstance(fields, str) else list(fields)
@@ -311,6 +326,8 @@ def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
         if unknown or not fields:
             raise ValueError(f"fields must be names among {names}; got {fields}")
         names = fields
+    elif signed:
+        names.remove("signed_distance")
     dtype = np.dtype([(name, _field_dtype(name, shape.dim)) for name in names])
     points = _points(dask, shape, points)
     shipped, per_host = _shipped(dask, shape)
@@ -321,6 +338,7 @@ def records(shape, points, *, method=DEFAULT_METHOD, threads=None, fields=None):
         threads,
         per_host,
         dtype,
+        sign,
         drop_axis=1,
         dtype=dtype,
         meta=np.empty((0,), dtype),

@@ -20,13 +20,23 @@ subtraction cancels) the exact squared distance is narrowed until the
 rounding of ``sqrt(s) - r`` is decided (:func:`proximity._exact.minus_radius`).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from . import primitives
-from ._rounding import certify_difference, surface_points
-from ._validate import broadcast_batch, freeze_result, frozen_float64, require_finite
-from .results import format_repr
+from ._rounding import certify_difference, outward, surface_points
+from ._typing import ArrayLike, Bools, Distances, Floats, Transform
+from ._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
+from .results import asdict, beyond, format_repr
 from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
+
+if TYPE_CHECKING:
+    from .posed import Posed
+    from .results import Result
+    from .shapes import Shape
 
 __all__ = ["Capsule", "Inflated", "Sphere"]
 
@@ -68,7 +78,7 @@ class Inflated(Frozen):
     __slots__ = ("core", "radius", "batch_shape", "dim")
     _public = ("__init__", "distance", "closest_point", "signed_distance", "contains")
 
-    def __init__(self, core, radius, *, copy=False):
+    def __init__(self, core: Shape, radius: ArrayLike, *, copy: bool = False) -> None:
         if not hasattr(core, "_rows") or not hasattr(core, "closest_point"):
             raise TypeError(f"core must be a proximity shape; got {type(core).__name__}")
         r = frozen_float64(radius, "radius", "(...)", copy)
@@ -86,19 +96,34 @@ class Inflated(Frozen):
         self._init(core=core, radius=r, batch_shape=batch, dim=core.dim)
 
     @property
-    def methods(self):
+    def methods(self) -> tuple[str, ...]:
         """The values ``method`` accepts: the core's."""
         return self.core.methods
 
     @property
-    def result_type(self):
+    def result_type(self) -> type[Result]:
         """The class of :meth:`closest_point`'s results: the core's."""
         return self.core.result_type
 
     def __repr__(self):
         return format_repr(self, ("radius",), core=self.core)
 
-    def inflated(self, radius):
+    def transformed(self, transform: Transform) -> Posed:
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
+
+    def inflated(self, radius: ArrayLike) -> Inflated:
         """The points within ``radius`` of this rounded shape: the core
         inflated by the sum of the radii (rounded to a float)."""
         return Inflated(self, radius)
@@ -121,6 +146,9 @@ class Inflated(Frozen):
     def _answer(self, points, method, full):
         """``(signed distance, result or None)``: the core's answer, rounded."""
         method = check_method(method, self.methods)
+        # The certified method's exact fallback needs each row's nearest
+        # primitive, which a collection's distances alone do not say.
+        full = full or (method.exact_fallback and not hasattr(self.core, "_primitive"))
         if full:
             core = self.core.closest_point(points, method=method.name)
             d = np.asarray(core.distance)
@@ -139,17 +167,31 @@ class Inflated(Frozen):
         """Per flat row of ``rows``: ``(primitive, params, point)`` of the core's nearest primitive."""
         return _primitive_rows(self.core, core, points, shape, rows)
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the rounded solid: ``max(d - r, 0)``.
 
-        Parameters and broadcasting are those of :func:`proximity.distance`.
+        Parameters and broadcasting are those of :func:`proximity.distance`;
+        ``max_distance`` is a cutoff, as for the other shapes.
         """
         if args:
             raise keyword_only(self, "distance", args)
+        limit = cutoff(max_distance)
         e, _, _ = self._answer(points, method, full=False)
-        return _frozen(np.maximum(e, 0.0) + 0.0)
+        return _frozen(beyond(np.maximum(e, 0.0) + 0.0, limit))
 
-    def signed_distance(self, points, *args, method=DEFAULT_METHOD):
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Signed distance to the rounded solid's surface, ``d - r``: negative inside.
 
         Examples
@@ -161,17 +203,24 @@ class Inflated(Frozen):
         """
         if args:
             raise keyword_only(self, "signed_distance", args)
+        limit = cutoff(max_distance)
         e, _, _ = self._answer(points, method, full=False)
-        return _frozen(e + 0.0)
+        return _frozen(beyond(e + 0.0, limit))
 
-    def contains(self, points, *args, method=DEFAULT_METHOD):
+    def contains(self, points: ArrayLike, *args: object, method: str = DEFAULT_METHOD) -> Bools:
         """Whether each point is in the rounded solid: within ``r`` of the core."""
         if args:
             raise keyword_only(self, "contains", args)
         e, _, _ = self._answer(points, method, full=False)
         return _frozen(e <= 0.0)
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """The nearest point of the rounded solid's surface to each point.
 
         Returns the core's result type: ``distance`` and ``sqr_distance``
@@ -180,6 +229,7 @@ class Inflated(Frozen):
         """
         if args:
             raise keyword_only(self, "closest_point", args)
+        limit = cutoff(max_distance)
         e, core, shape = self._answer(points, method, full=True)
         p = np.broadcast_to(np.asarray(points, dtype=np.float64), shape + (self.dim,))
         c = np.broadcast_to(np.asarray(core.point), shape + (self.dim,))
@@ -189,10 +239,18 @@ class Inflated(Frozen):
         point = surface_points(p, c, d, r, rows_of)
         distance = np.maximum(e, 0.0) + 0.0
         fields = {name: np.broadcast_to(value, shape + np.shape(value)[np.ndim(core.distance) :])
-                  for name, value in vars(core).items()}  # fmt: skip
+                  for name, value in asdict(core).items()}  # fmt: skip
         with np.errstate(over="ignore", under="ignore"):
             fields.update(distance=distance, sqr_distance=distance * distance, point=point)
-        return type(core)(**fields)
+        result = type(core)(**fields)
+        # Its normals: the rounded surface's, outwards (along P - point where P is outside).
+        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape))
+        result.__dict__["_normal"] = freeze_result(np.array(normal))
+        if limit < np.inf:
+            far = np.asarray(result.distance) > limit
+            result = beyond(result, limit)
+            result.__dict__["_normal"] = freeze_result(np.where(far[..., None], np.nan, normal))
+        return result
 
 
 class Sphere(Inflated):
@@ -212,13 +270,13 @@ class Sphere(Inflated):
 
     __slots__ = ()
 
-    def __init__(self, center, radius, *, copy=False):
+    def __init__(self, center: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
         from .shapes import Point
 
         super().__init__(Point(center, copy=copy), radius, copy=copy)
 
     @property
-    def center(self):
+    def center(self) -> Floats:
         """The centers, ``batch + (D,)``."""
         return self.core.position
 
@@ -241,13 +299,13 @@ class Capsule(Inflated):
 
     __slots__ = ()
 
-    def __init__(self, vertices, radius, *, copy=False):
+    def __init__(self, vertices: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
         from .shapes import Segment
 
         super().__init__(Segment(vertices, copy=copy), radius, copy=copy)
 
     @property
-    def vertices(self):
+    def vertices(self) -> Floats:
         """The segments' endpoints, ``batch + (2, D)``."""
         return self.core.vertices
 

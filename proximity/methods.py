@@ -102,4 +102,16 @@ def resolve(method):
         raise TypeError(
             f"method must be a str, one of {tuple(REGISTRY)}; got {type(method).__name__} {method!r}"
         )
-    raise ValueError(f"method must be one of {tuple(REGISTRY)}; got {method!r}")
+    raise ValueError(f"method must be one of {tuple(REGISTRY)}; got {method!r}{suggest(method, REGISTRY)}")
+
+
+def suggest(name, names):
+    """``"; did you mean 'robust'?"`` where ``name`` is close to one of ``names`` (a
+    different case, a typo), else ``""``."""
+    import difflib
+
+    lowered = {n.lower(): n for n in names}
+    close = lowered.get(name.lower()) or next(
+        iter(difflib.get_close_matches(name.lower(), lowered, n=1, cutoff=0.75)), None
+    )
+    return "" if close is None else f"; did you mean {lowered.get(close, close)!r}?"

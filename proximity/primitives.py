@@ -44,6 +44,7 @@ __all__ = [
     "Primitive",
     "offering",
     "present",
+    "transform_rows",
     "vertex_counts",
 ]
 
@@ -73,6 +74,9 @@ class Primitive:
     axis : int or None
         The first of the three parameters that hold its unit normal, for a
         primitive with an axis (disks and circles), else None.
+    points, directions : tuple of int
+        The first columns of the row's points and of its directions, three
+        values each: what a rigid motion moves and what it turns.
 
     Examples
     --------
@@ -90,6 +94,8 @@ class Primitive:
     extra: tuple
     methods: tuple = ("robust", "certified", "eberly")
     axis: int | None = None
+    points: tuple = ()
+    directions: tuple = ()
 
     @property
     def kernels(self):
@@ -101,13 +107,19 @@ class Primitive:
         return f"Primitive({self.name!r})"
 
 
-TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),))
-DISK = Primitive("disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)), axis=3)
-CIRCLE = Primitive(
-    "circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)), axis=3
+TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),), points=(0, 3, 6))
+# A disk's and a circle's row: center, unit normal, normal as given, radius.
+DISK = Primitive(
+    "disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)), axis=3, points=(0,), directions=(3, 6)
 )
-SEGMENT = Primitive("segment", 3, 6, 2, "point_segment", (("parameter", 1),), ("robust", "certified"))
-POINT = Primitive("point", 4, 3, 1, "point_point", (), ("robust", "certified"))
+CIRCLE = Primitive(
+    "circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)),
+    axis=3, points=(0,), directions=(3, 6),
+)  # fmt: skip
+SEGMENT = Primitive(
+    "segment", 3, 6, 2, "point_segment", (("parameter", 1),), ("robust", "certified"), points=(0, 3)
+)
+POINT = Primitive("point", 4, 3, 1, "point_point", (), ("robust", "certified"), points=(0,))
 
 #: Every primitive, by name, in code order.
 REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE, SEGMENT, POINT)}
@@ -138,3 +150,16 @@ def present(kinds):
 def offering(method):
     """The primitives that offer ``method`` (a :class:`~proximity.methods.Method`), in code order."""
     return tuple(p for p in BY_CODE if method.name in p.methods)
+
+
+def transform_rows(kinds, params, rotation, translation):
+    """Stored rows ``params`` moved by the rigid motion ``X -> R X + t``: each
+    kind's points moved, its directions turned (a new array)."""
+    out = np.array(params, dtype=np.float64, copy=True)
+    for p in present(kinds):
+        rows = kinds == p.code
+        for c in p.points:
+            out[rows, c : c + 3] = params[rows, c : c + 3] @ rotation.T + translation
+        for c in p.directions:
+            out[rows, c : c + 3] = params[rows, c : c + 3] @ rotation.T
+    return out

@@ -12,6 +12,50 @@ import numpy as np
 from ._validate import freeze_fields, freeze_result
 from .features import _FEATURES, Feature
 
+# Keys of a result's ``__dict__`` besides its fields: the query that made it
+# (points, the batch member of each row or None, the shape), which its normals
+# need, and the normals once computed.
+_QUERY = "_query"
+_NORMAL = "_normal"
+
+
+def asdict(result):
+    """The fields of a result, by name (its arrays, not copies)."""
+    return {f.name: getattr(result, f.name) for f in fields(result)}
+
+
+def attach(result, points, members, shape):
+    """Keep with ``result`` the query that made it, for its :attr:`Result.normal`:
+    ``points`` (broadcasting to the result's batch), the batch member of
+    ``shape`` each row asked (None where the shape is not a batch), and
+    ``shape``, whose ``_surface_normals(result, rows)`` gives the normals of
+    rows on it."""
+    result.__dict__[_QUERY] = (points, members, shape)
+    return result
+
+
+def _normals(result, points, members, shape):
+    """``(P - point) / distance``, and the shape's normals where the distance is 0."""
+    point = np.asarray(result.point)
+    distance = np.asarray(result.distance)
+    dim = point.shape[-1]
+    points = np.broadcast_to(np.asarray(points, dtype=np.float64)[..., :dim], point.shape)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        normal = (points - point) / distance[..., None]
+        # Where the difference's squares overflow or underflow, a scaled unit vector.
+        length = np.linalg.norm(normal, axis=-1)
+        off = np.isfinite(distance) & (distance > 0) & ~(np.abs(length - 1.0) < 1e-6)
+        if off.any():
+            v = (points - point)[off]
+            v = v / np.max(np.abs(v), axis=-1, keepdims=True)
+            normal[off] = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    on = np.flatnonzero((distance == 0).reshape(-1))
+    if len(on):
+        flat = normal.reshape(-1, dim)
+        index = None if members is None else np.broadcast_to(members, distance.shape).reshape(-1)[on]
+        flat[on] = shape._surface_normals(result, on, index)[:, :dim]
+    return normal
+
 
 def _frozen(value):
     if isinstance(value, np.ndarray):
@@ -88,12 +132,48 @@ class Result:
                 value = np.int8(value)
             object.__setattr__(self, name, value)
 
+    def __getstate__(self):
+        # The fields, and the normals (computed now: the query they need stays here).
+        state = asdict(self)
+        if _QUERY in self.__dict__ or _NORMAL in self.__dict__:
+            state[_NORMAL] = self.normal
+        return state
+
     def __setstate__(self, state):
         # Arrays come back from a pickle writeable: make them read-only again.
         self.__dict__.update(freeze_fields(state))
 
     def __repr__(self):
         return format_repr(self, [f.name for f in fields(self)])
+
+    @property
+    def normal(self):
+        """Unit vector from the closest point towards the query point, ``batch + (D,)``.
+
+        ``(P - point) / distance`` where the distance is positive; on the
+        shape, the shape's own normal there: a triangle's or a disk's face
+        normal (as its vertices or its normal orient it), a mesh's
+        angle-weighted pseudonormal of the closest face, edge or vertex
+        (outwards on a closed, consistently oriented mesh), a circle's axis,
+        a segment's perpendicular with the smallest component along the
+        coordinate axis least aligned with it, a point's ``+z``; NaN where
+        the row has no answer.  Computed at its first use and kept.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        >>> tri.closest_point([[0.2, 0.2, 3.0], [2, 0, 0], [0.2, 0.2, 0.0]]).normal.tolist()
+        [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        """
+        normal = self.__dict__.get(_NORMAL)
+        if normal is None:
+            query = self.__dict__.get(_QUERY)
+            if query is None:
+                raise AttributeError(f"this {type(self).__name__} was not made by a query: it has no normals")
+            normal = freeze_result(np.asarray(_normals(self, *query)))
+            self.__dict__[_NORMAL] = normal
+        return normal[()] if normal.ndim == 1 and np.ndim(self.distance) == 0 else normal
 
     @property
     def feature_name(self):
@@ -130,7 +210,16 @@ class Result:
         """
         if np.ndim(self.distance) == 0:
             raise IndexError("a single query's result has no batch to index")
-        return type(self)(**{name: value[index] for name, value in vars(self).items()})
+        result = type(self)(**{name: value[index] for name, value in asdict(self).items()})
+        if _NORMAL in self.__dict__:
+            result.__dict__[_NORMAL] = self.__dict__[_NORMAL][index]
+        elif _QUERY in self.__dict__:
+            points, members, shape = self.__dict__[_QUERY]
+            batch = np.shape(self.distance)
+            points = np.broadcast_to(points, batch + points.shape[-1:])[index]
+            members = None if members is None else np.broadcast_to(members, batch)[index]
+            result.__dict__[_QUERY] = (points, members, shape)
+        return result
 
 
 @dataclass(frozen=True, repr=False)
@@ -392,4 +481,35 @@ def circle_from_row(row):
     """:class:`CircleResult` of one fast-path query."""
     result, fields = _round_from_row(CircleResult, row)
     fields["equidistant"] = row[6] != 0.0
+    return result
+
+
+def beyond(answer, limit):
+    """``answer`` (a result, or an array of distances) with the rows farther
+    than ``limit`` set as a cutoff sets them: distance and squared distance
+    ``inf``, NaN points and parameters, feature ``NONE``, False flags, -1
+    indices.  The other rows, and an answer with none beyond, are returned
+    as they are."""
+    if not isinstance(answer, Result):
+        far = np.asarray(answer) > limit
+        return np.where(far, np.inf, answer)[()] if far.any() else answer
+    far = np.asarray(answer.distance) > limit
+    if not far.any():
+        return answer
+    values = {}
+    for name, value in asdict(answer).items():
+        value = np.array(value)
+        mask = far.reshape(far.shape + (1,) * (value.ndim - far.ndim))
+        if name in ("distance", "sqr_distance"):
+            fill = np.inf
+        elif value.dtype == np.bool_:
+            fill = False
+        elif value.dtype.kind == "i":
+            fill = -1
+        else:
+            fill = np.nan
+        values[name] = np.where(mask, fill, value).astype(value.dtype)
+    result = type(answer)(**values)
+    if _QUERY in answer.__dict__:
+        result.__dict__[_QUERY] = answer.__dict__[_QUERY]
     return result

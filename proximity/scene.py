@@ -11,12 +11,22 @@ primitive for small scenes, a bounding-volume hierarchy above
 :data:`BRUTE_FORCE_MAX` primitives.  Both give the same answer, bit for bit.
 """
 
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from . import primitives
 from ._collection import BRUTE_FORCE_MAX, Collection
+from ._typing import ArrayLike
 from ._validate import frozen
 from .results import SceneResult
+
+if TYPE_CHECKING:
+    from .shapes import Shape
 
 # The shapes a scene takes, for the messages.
 _NAMES = "proximity shape (Triangle, Segment, Point, Disk, Circle, TriangleMesh, Scene or a rounded one)"
@@ -70,31 +80,114 @@ class Scene(Collection):
     Scene([<Triangle batch_shape=(2,)>, <Disk batch_shape=()>], broad_phase='brute')
     """
 
-    __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds")
+    __slots__ = ("shapes", "offsets", "broad_phase", "methods", "_tree", "_kinds", "_instanced")
+    _derived = ("_instanced",)
     result_type = SceneResult
 
-    def __init__(self, shapes, *, broad_phase="auto"):
+    def __init__(self, shapes: Iterable[Shape], *, broad_phase: str = "auto") -> None:
         if not isinstance(shapes, (list, tuple)):
             raise TypeError(f"shapes must be a list or tuple of {_NAMES}; got {type(shapes).__name__}")
-        kinds, params, counts, methods = _primitives(shapes)
+        # Posed meshes and scenes are instances: their hierarchies are shared,
+        # not merged; the other shapes' primitives make the scene's own tree.
+        posed = [_instance(shape) for shape in shapes]
+        loose = [shape for shape, inst in zip(shapes, posed, strict=True) if not inst]
+        kinds, params, loose_counts, methods = _primitives(loose)
+        counts, codes, start = [], [], 0
+        remaining = iter(loose_counts)
+        for shape, inst in zip(shapes, posed, strict=True):
+            if inst:
+                counts.append(len(shape.shape))
+                codes.append(shape.shape._kind_codes())
+                methods = _common(methods, shape.methods)
+            else:
+                count = next(remaining)
+                counts.append(count)
+                codes.append(kinds[start : start + count])
+                start += count
         if sum(counts) == 0:
             raise ValueError(f"shapes must hold at least one primitive; got {len(shapes)} shapes with none")
-        resolved, tree = self._tree_for(
-            broad_phase,
-            len(kinds),
-            lambda bp: bp.build_tree(kinds, params),
-            lambda bp: bp.brute(kinds, params),
-        )
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         offsets.flags.writeable = False
+        tree, resolved = None, broad_phase
+        if len(kinds):
+            resolved, tree = self._tree_for(
+                broad_phase,
+                len(kinds),
+                lambda bp: bp.build_tree(kinds, params),
+                lambda bp: bp.brute(kinds, params),
+            )
+            if any(posed):  # the loose primitives, numbered among the instances'
+                tree = dataclasses.replace(tree, index=_renumbered(tree.index, offsets, posed))
+        elif broad_phase not in ("auto", "brute", "bvh"):
+            raise ValueError(f"broad_phase must be one of ('auto', 'brute', 'bvh'); got {broad_phase!r}")
         self._init(
             shapes=tuple(shapes),
             offsets=offsets,
-            broad_phase=resolved,
+            broad_phase="bvh" if any(posed) else resolved,
             methods=methods,
             _tree=tree,
-            _kinds=frozen(kinds, dtype=np.int8, new=True),
+            _kinds=frozen(np.concatenate(codes), dtype=np.int8, new=True),
         )
+        self._init(**self._derive())
+
+    def _derive(self):
+        """The instances: the posed meshes and scenes, and the loose primitives
+        as one more, unmoved (None where there are no posed ones)."""
+        posed = [_instance(shape) for shape in self.shapes]
+        if not any(posed):
+            return {"_instanced": None}
+        prototypes, which = [], []
+        for shape, inst in zip(self.shapes, posed, strict=True):
+            if inst:
+                known = [k for k, p in enumerate(prototypes) if p is shape.shape]
+                which.append(known[0] if known else len(prototypes))
+                if not known:
+                    prototypes.append(shape.shape)
+        jobs = [j for j, inst in enumerate(posed) if inst]
+        rotation = np.array([self.shapes[j].rotation for j in jobs])
+        translation = np.array([self.shapes[j].translation for j in jobs])
+        own = getattr(self, "_tree", None)  # unpickling: restored after the rest
+        trees = tuple(p._tree for p in prototypes) + (() if own is None else (own,))
+        instances = _Instances(trees, np.array(which, np.int64), self.offsets[jobs], own is not None)
+        return {"_instanced": instances.posed(rotation, translation)}
+
+    def with_poses(self, transforms: ArrayLike) -> Scene:
+        """The scene with its posed meshes and scenes moved to ``transforms``,
+        ``(n, 4, 4)``: one per posed view among :attr:`shapes`, in order.
+
+        The instances' hierarchies are shared and only their poses change:
+        a new frame costs O(instances), nothing per face.
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> tet = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                              [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        >>> scene = proximity.Scene([tet.transformed(np.eye(4)), tet.transformed(np.eye(4))])
+        >>> T = np.tile(np.eye(4), (2, 1, 1)); T[:, 0, 3] = [0, 10]
+        >>> scene.with_poses(T).distance([[12, 0, 0]]).tolist()
+        [1.0]
+        """
+        from .posed import Posed, rigid
+
+        if self._instanced is None:
+            raise ValueError(
+                "with_poses needs a scene of posed meshes or scenes (shape.transformed(T)); this has none"
+            )
+        jobs = [j for j, shape in enumerate(self.shapes) if _instance(shape)]
+        rotation, translation = rigid(transforms, "transforms")
+        if rotation.shape != (len(jobs), 3, 3):
+            raise ValueError(
+                f"transforms must have shape ({len(jobs)}, 4, 4), one per posed view; "
+                f"got {rotation.shape[:-2] + (4, 4)}"
+            )
+        shapes = list(self.shapes)
+        for k, j in enumerate(jobs):
+            shapes[j] = Posed._at(self.shapes[j].shape, rotation[k], translation[k])
+        scene = object.__new__(Scene)
+        scene._init(**{name: getattr(self, name) for name in self._slots() if name not in self._derived})
+        scene._init(shapes=tuple(shapes), _instanced=self._instanced.posed(rotation, translation))
+        return scene
 
     def __len__(self):
         """Number of primitives."""
@@ -106,6 +199,9 @@ class Scene(Collection):
             shapes += f", ... ({len(self.shapes) - 4} more)"
         return f"Scene([{shapes}], broad_phase={self.broad_phase!r})"
 
+    def _nearest_index(self, result):
+        return np.asarray(result.primitive)
+
     def _rows(self):
         """``(kinds, params)`` of every primitive, in order, as a collection stores them."""
         kinds, params, _, _ = _primitives(self.shapes)
@@ -115,6 +211,9 @@ class Scene(Collection):
         """``(kinds, params)`` of primitives ``index``, as the tree stores them."""
         kinds, params, _, _ = _primitives(self.shapes)
         return kinds[index], params[index]
+
+    def _kind_codes(self):
+        return self._kinds
 
     def _result(self, fields):
         index = fields.pop("index")
@@ -140,6 +239,54 @@ class Scene(Collection):
                 mask = mine[..., None] if width > 1 else mine
                 values[name] = np.where(mask, value, values.get(name, empty))
         return SceneResult(**fields, primitive=index, source=source, **values)
+
+
+class _Instances:
+    """A scene's instances: the prototypes' trees (the loose primitives'
+    last, where there are any), each posed view's prototype and first
+    primitive, and their poses' arrays for the search, made per pose."""
+
+    def __init__(self, trees, prototype, offset, loose_tree):
+        self.trees, self.prototype, self.offset, self.loose_tree = trees, prototype, offset, loose_tree
+        self.arrays = None
+
+    def posed(self, rotation, translation):
+        """The instances at these poses (those of the posed views, in order)."""
+        from .broadphase.instances import instance_arrays
+
+        out = _Instances(self.trees, self.prototype, self.offset, self.loose_tree)
+        prototype, offset = self.prototype, self.offset
+        rotation, translation = np.asarray(rotation).reshape(-1, 3, 3), np.asarray(translation).reshape(-1, 3)
+        if self.loose_tree:
+            prototype = np.append(prototype, len(self.trees) - 1)
+            offset = np.append(offset, 0)
+            rotation = np.concatenate([rotation, np.eye(3)[None]])
+            translation = np.concatenate([translation, np.zeros((1, 3))])
+        out.arrays = {
+            loose: instance_arrays(self.trees, prototype, rotation, translation, offset, loose)
+            for loose in (False, True)
+        }
+        return out
+
+
+def _instance(shape):
+    """Whether ``shape`` is a posed mesh or scene: an instance in a scene."""
+    from .posed import Posed
+
+    return isinstance(shape, Posed) and isinstance(shape.shape, Collection)
+
+
+def _common(methods, more):
+    return more if methods is None else tuple(m for m in methods if m in more)
+
+
+def _renumbered(index, offsets, posed):
+    """The loose primitives' tree indices as the scene numbers them, among the instances'."""
+    numbers = np.concatenate(
+        [np.arange(offsets[j], offsets[j + 1]) for j, inst in enumerate(posed) if not inst]
+        or [np.zeros(0, int)]
+    )
+    return frozen(numbers[index], dtype=np.int64, new=True)
 
 
 def _summary(shape):

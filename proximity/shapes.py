@@ -6,15 +6,19 @@ The kernels are imported on first use, so that ``import proximity`` does not
 pay for loading the compiler.
 """
 
+from __future__ import annotations
+
 import types
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 from . import _counts, _lazy, _pool, _threads
+from ._typing import ArrayLike, Distances, Floats, Transform
 from ._validate import (
     as_float64,
     broadcast_batch,
+    cutoff,
     freeze_fields,
     frozen,
     frozen_float64,
@@ -29,6 +33,8 @@ from .results import (
     Result,
     SegmentResult,
     TriangleResult,
+    attach,
+    beyond,
     circle_from_row,
     disk_from_row,
     format_repr,
@@ -36,6 +42,10 @@ from .results import (
     segment_from_row,
     triangle_from_row,
 )
+
+if TYPE_CHECKING:
+    from .inflated import Inflated
+    from .posed import Posed
 
 DEFAULT_METHOD = DEFAULT
 _FLOAT64 = np.dtype(np.float64)
@@ -76,10 +86,10 @@ class Shape(Protocol):
     dim: int
     methods: tuple
 
-    def closest_point(self, points, *, method: str = DEFAULT_METHOD) -> Result:
+    def closest_point(self, points: ArrayLike, *, method: str = DEFAULT_METHOD) -> Result:
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
 
-    def distance(self, points, *, method: str = DEFAULT_METHOD) -> np.ndarray:
+    def distance(self, points: ArrayLike, *, method: str = DEFAULT_METHOD) -> Distances:
         """Distance from each point to the shape; see :func:`proximity.distance`."""
 
 
@@ -123,6 +133,7 @@ class Frozen:
                 function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
             )
             copy.__kwdefaults__ = function.__kwdefaults__
+            copy.__annotations__ = dict(function.__annotations__)
             copy.__doc__ = function.__doc__
             copy.__qualname__ = f"{cls.__name__}.{name}"
             copy.__module__ = cls.__module__
@@ -200,7 +211,22 @@ class _Facade(Frozen):
             args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
         return type(self)(*args)
 
-    def inflated(self, radius):
+    def transformed(self, transform: Transform) -> Posed:
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
+
+    def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the shape: a rounded solid
         (:class:`proximity.Inflated`), ``radius`` broadcasting with the batch.
 
@@ -275,20 +301,36 @@ class _Facade(Frozen):
             self._kernels().exact_row(row, self._args, point)
         _counts.count(1, int(undecided))
 
-    def distance(self, points, *args, method=DEFAULT_METHOD):
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
         """Distance from each point to the shape; see :func:`proximity.distance`."""
         if args:
             raise keyword_only(self, "distance", args)
+        if max_distance is not None:
+            return beyond(self.distance(points, method=method), cutoff(max_distance))
         row = self._single(points, method)
         if row is not None:
             return row[0]
         out_shape, out = self._query(points, method, full=False)
         return out["distance"].reshape(out_shape)[()]
 
-    def closest_point(self, points, *args, method=DEFAULT_METHOD):
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
         """Closest point on the shape to each point; see :func:`proximity.closest_point`."""
         if args:
             raise keyword_only(self, "closest_point", args)
+        if max_distance is not None:
+            return beyond(self.closest_point(points, method=method), cutoff(max_distance))
         # One float64 point against a single shape is the drop-in narrow-phase
         # call, made once per pair from Python; it is :meth:`_single` written
         # out, because at a few microseconds a call every lookup counts.
@@ -302,10 +344,12 @@ class _Facade(Frozen):
                 if exact_fallback:
                     self._certified_row(row, points)
                 row.setflags(False)  # write=False, passed positionally: the faster call
-                return self._from_row(row)
+                result = self._from_row(row)
+                result.__dict__["_query"] = (points, None, self)  # for its normal (results.attach)
+                return result
         row = self._single(points, method)
         if row is not None:
-            return self._from_row(row)
+            return attach(self._from_row(row), points, None, self)
         out_shape, out = self._query(points, method, full=True)
         fields = {}
         for name, value in out.items():
@@ -313,7 +357,20 @@ class _Facade(Frozen):
             if name == "point":
                 value = value[..., : self.dim]
             fields[name] = value
-        return self._result(**fields)
+        count = int(np.prod(self.batch_shape, dtype=int))
+        members = np.arange(count).reshape(self.batch_shape) if self.batch_shape else None
+        return attach(self._result(**fields), as_float64(points, "points", ""), members, self)
+
+    def _surface_normals(self, result, rows, members):
+        """The shape's normals at the closest points of rows ``rows`` (on the
+        shape), asked of batch members ``members`` (None: the shape is one)."""
+        kinds, params = self._rows()
+        m = np.zeros(len(rows), np.int64) if members is None else members
+        if self.dim == 2:
+            return _normals_2d(self._corners if hasattr(self, "_corners") else 0, params[m])
+        from ._rounding import surface_directions
+
+        return surface_directions(kinds[m], params[m])
 
 
 class _Hull(_Facade):
@@ -328,7 +385,7 @@ class _Hull(_Facade):
     _corners = 3
     _fields = (("vertices", 2),)  # the constructor's arrays, and their core dimensions
 
-    def __init__(self, vertices, *, copy=False):
+    def __init__(self, vertices: ArrayLike, *, copy: bool = False) -> None:
         n = self._corners
         expected = f"(..., {n}, D) with D = 2 or 3"
         v = frozen_float64(vertices, "vertices", expected, copy)
@@ -458,7 +515,7 @@ class Point(_Hull):
     _from_row = staticmethod(point_from_row)
     _entries = {}
 
-    def __init__(self, position, *, copy=False):
+    def __init__(self, position: ArrayLike, *, copy: bool = False) -> None:
         expected = "(..., D) with D = 2 or 3"
         p = frozen_float64(position, "position", expected, copy)
         if p.ndim < 1 or p.shape[-1] not in (2, 3):
@@ -468,7 +525,7 @@ class Point(_Hull):
         self._init(**self._derive())
 
     @property
-    def position(self):
+    def position(self) -> Floats:
         """The points, ``batch + (D,)``, read-only."""
         return self.vertices[..., 0, :]
 
@@ -485,7 +542,9 @@ class _Round(_Facade):
 
     _entries = {}  # method name -> (one-query entry point, exact fallback), compiled on first use
 
-    def __init__(self, center, normal, radius, *, copy=False):
+    def __init__(
+        self, center: ArrayLike, normal: ArrayLike, radius: ArrayLike, *, copy: bool = False
+    ) -> None:
         c = frozen_float64(center, "center", "(..., 3)", copy)
         n = frozen_float64(normal, "normal", "(..., 3)", copy)
         r = frozen_float64(radius, "radius", "(...)", copy)
@@ -600,6 +659,19 @@ class Disk(_Round):
     _result = DiskResult
     _from_row = staticmethod(disk_from_row)
     _is_disk = True
+
+
+def _normals_2d(corners, params):
+    """Normals of 2D hulls (embedded in ``z = 0``) at points on them: a
+    segment's perpendicular in the plane; none (NaN) for a triangle or a
+    point, which have no direction there."""
+    out = np.full((len(params), 3), np.nan)
+    if corners == 2:
+        e = params[:, 3:5] - params[:, 0:2]
+        e = e / np.max(np.abs(e), axis=1, keepdims=True)
+        n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1, keepdims=True)
+        out[:, :2] = np.where(np.isfinite(n), n, np.nan)
+    return out
 
 
 def _rows(primitive, params):

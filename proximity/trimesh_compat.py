@@ -22,6 +22,7 @@ import weakref
 import numpy as np
 
 from ._validate import as_array
+from .features import Feature
 from .mesh import TriangleMesh
 
 #: Meshes built from ``trimesh.Trimesh`` objects, kept so that repeated calls
@@ -66,12 +67,108 @@ def _mesh(mesh):
 
 
 def _points(points):
-    """``points`` as a float64 array ``(n, 3)``: converted as trimesh does
-    (``np.asarray(points, dtype=np.float64)``), with errors that name them."""
+    """``points`` as a float64 array ``(n, 3)``, and whether it was one point ``(3,)``:
+    converted as trimesh does (``np.asarray(points, dtype=np.float64)``), with
+    errors that name them."""
     points = as_array(points, "points", "(n, 3)", dtype=np.float64)
+    one = points.shape == (3,)
+    if one:
+        points = points[None]
     if points.ndim != 2 or points.shape[1] != 3:
-        raise ValueError(f"points must be (n, 3); got shape {points.shape}")
-    return points
+        raise ValueError(f"points must be (n, 3), or (3,) for one point; got shape {points.shape}")
+    return points, one
+
+
+def _one(arrays, one):
+    """The answers of one point without their leading axis (NumPy scalars for
+    per-point values), as scipy's k-d tree gives them; else as they are."""
+    if not one:
+        return arrays
+    return tuple(a[0] for a in arrays)
+
+
+# -- trimesh's choice among faces at the same distance ------------------------------------
+
+# The two vertex columns of each edge feature, by feature code.
+_EDGE_COLUMNS = {
+    int(Feature.EDGE01): (0, 1),
+    int(Feature.EDGE12): (1, 2),
+    int(Feature.EDGE20): (2, 0),
+}
+_VERTEX_CODES = (int(Feature.VERTEX0), int(Feature.VERTEX1), int(Feature.VERTEX2))
+
+
+class _Incidence:
+    """The faces around each vertex of a mesh (by index), and the faces' unit normals."""
+
+    def __init__(self, mesh):
+        flat = mesh.faces.ravel()
+        order = np.argsort(flat, kind="stable")
+        self.face_of = order // 3
+        self.start = np.searchsorted(flat[order], np.arange(len(mesh.vertices) + 1))
+        t = mesh.vertices[mesh.faces]
+        normal = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        length = np.linalg.norm(normal, axis=1, keepdims=True)
+        self.normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+
+
+_INCIDENCE = {}
+
+
+def _incidence(mesh):
+    """:class:`_Incidence` of ``mesh``, kept for the last few meshes (they are immutable)."""
+    with _LOCK:
+        entry = _INCIDENCE.get(id(mesh))
+        if entry is not None and entry[0] is mesh:
+            return entry[1]
+    incidence = _Incidence(mesh)
+    with _LOCK:
+        if len(_INCIDENCE) >= _CACHE_SIZE:
+            _INCIDENCE.pop(next(iter(_INCIDENCE)))
+        _INCIDENCE[id(mesh)] = (mesh, incidence)
+    return incidence
+
+
+def _facing(mesh, points, r):
+    """The nearest face of each point, where several hold its closest point, as trimesh picks it.
+
+    A closest point on an edge or a vertex of the nearest face is on every
+    face that shares that edge or vertex (by vertex index), at the same
+    distance.  Of those, the one whose unit normal points most towards the
+    query point is chosen (the lowest index among equals).
+    """
+    face = np.array(r.face)
+    feature = np.asarray(r.feature)
+    rows = np.flatnonzero((feature != int(Feature.FACE)) & (feature >= 0) & (np.asarray(r.distance) > 0))
+    if len(rows) == 0:
+        return face
+    inc = _incidence(mesh)
+    code = feature[rows].astype(np.int64)
+    own = mesh.faces[face[rows]]
+    # The columns of the feature's vertices in its face: a vertex's (its code),
+    # or an edge's two, the faces around the first then checked for the second.
+    first = np.where(np.isin(code, _VERTEX_CODES), code, 0)
+    second = np.full(len(rows), -1)
+    for c, (i, j) in _EDGE_COLUMNS.items():
+        at = code == c
+        first[at], second[at] = i, j
+    k = np.arange(len(rows))
+    a = own[k, first]
+    b = np.where(second >= 0, own[k, np.maximum(second, 0)], -1)
+    # Every (row, face around a) pair, flattened.
+    counts = inc.start[a + 1] - inc.start[a]
+    row = np.repeat(np.arange(len(rows)), counts)
+    offset = np.arange(len(row)) - np.repeat(np.cumsum(counts) - counts, counts)
+    candidate = inc.face_of[inc.start[a][row] + offset]
+    keep = (b[row] < 0) | (mesh.faces[candidate] == b[row, None]).any(axis=1)
+    row, candidate = row[keep], candidate[keep]
+    towards = points[rows] - np.asarray(r.point)[rows]
+    dot = np.einsum("ij,ij->i", inc.normal[candidate], towards[row])
+    # Per row: the largest dot, then the lowest face index.
+    order = np.lexsort((candidate, -dot, row))
+    firsts = order[np.r_[True, row[order][1:] != row[order][:-1]]]
+    face[rows[row[firsts]]] = candidate[firsts]
+    return face
 
 
 def closest_point(mesh, points):
@@ -84,7 +181,7 @@ def closest_point(mesh, points):
         its bounding-volume hierarchy) while the mesh is alive and
         unchanged; a ``(vertices, faces)`` pair is converted on every call,
         so pass a :class:`proximity.TriangleMesh` to reuse one.
-    points : array_like, shape ``(m, 3)``
+    points : array_like, shape ``(m, 3)``, or ``(3,)`` for one point
         Points in space.
 
     Returns
@@ -96,21 +193,31 @@ def closest_point(mesh, points):
     triangle_id : ndarray of int64, shape ``(m,)``
         Index of the face holding the closest point.
 
+    For one point of shape ``(3,)`` (which trimesh refuses), the same
+    without the leading axis: ``(3,)``, a float64 and an int64 scalar.
+
     Raises
     ------
     ValueError
-        If ``points`` is not ``(m, 3)``, as trimesh does.
+        If ``points`` is neither ``(m, 3)`` nor ``(3,)``.
 
     Notes
     -----
     Distances are those of ``proximity``'s ``robust`` method: within
     ``8 eps S`` of the exact distance to the nearest face, where trimesh
     decides each face's closest feature with an absolute tolerance and is
-    off by up to the size of a face on small faces.  ``triangle_id`` differs
-    from trimesh's only where several faces hold the closest point (an edge
-    or a vertex): trimesh takes the face whose normal points most towards
-    the query point, this function the lowest index.  A point containing
-    NaN or inf gives NaN and id -1.  The arrays are new and writable.
+    off by up to the size of a face on small faces.
+
+    Where several faces hold the closest point (it lies on an edge or a
+    vertex), ``triangle_id`` is the face whose normal points most towards
+    the query point, as trimesh prefers (the lowest index among faces that
+    point alike).  The candidates are the faces that share the edge or the
+    vertex by index; trimesh's differ in two ways: it compares only the two
+    nearest faces by its rounded distances (so at a vertex of more than two
+    faces it may pick another), and it applies the rule only where the
+    squared distance exceeds ``trimesh.tol.merge`` (1e-8, absolute), taking
+    the first candidate closer in.  A point containing NaN or inf gives NaN
+    and id -1.  The arrays are new and writable.
 
     Examples
     --------
@@ -121,9 +228,10 @@ def closest_point(mesh, points):
     >>> closest.round(6).tolist(), distance.round(6).tolist(), triangle_id.tolist()
     ([[0.333333, 0.333333, 0.333333], [0.0, 0.2, 0.3]], [1.154701, 1.0], [3, 2])
     """
-    points = _points(points)
-    r = _mesh(mesh).closest_point(points)
-    return np.array(r.point), np.array(r.distance), np.array(r.face)
+    points, one = _points(points)
+    built = _mesh(mesh)
+    r = built.closest_point(points)
+    return _one((np.array(r.point), np.array(r.distance), _facing(built, points, r)), one)
 
 
 def signed_distance(mesh, points):
@@ -134,19 +242,20 @@ def signed_distance(mesh, points):
     mesh : trimesh.Trimesh, (vertices, faces) or proximity.TriangleMesh
         A closed mesh (see :meth:`proximity.TriangleMesh.signed_distance`),
         converted and kept as in :func:`closest_point`.
-    points : array_like, shape ``(n, 3)``
+    points : array_like, shape ``(n, 3)``, or ``(3,)`` for one point
 
     Returns
     -------
     ndarray of float64, shape ``(n,)``
         The distance, positive inside the mesh, negative outside and
         ``+0.0`` on it: trimesh's convention, the opposite of
-        :meth:`proximity.TriangleMesh.signed_distance`.  New and writable.
+        :meth:`proximity.TriangleMesh.signed_distance`.  New and writable;
+        a float64 scalar for one point.
 
     Raises
     ------
     ValueError
-        If ``points`` is not ``(n, 3)``, or the mesh is not closed.
+        If ``points`` is neither ``(n, 3)`` nor ``(3,)``, or the mesh is not closed.
 
     Notes
     -----
@@ -154,9 +263,13 @@ def signed_distance(mesh, points):
     projects into that face, and from ray tests otherwise, and gives every
     point within ``trimesh.tol.merge`` (1e-8, absolute) of the surface a
     positive distance whichever its side; this function gives every point
-    its side (from the angle-weighted pseudonormal of the closest feature),
-    down to rounding error.  Where trimesh answers an open mesh with ray
-    tests, this function raises; use
+    its side (``sign="auto"``: the angle-weighted pseudonormal of the
+    closest feature on a mesh that bounds a solid, the exact winding number
+    on other closed meshes, with a warning), down to rounding error.  A
+    mesh whose vertices are split along seams (as textured files load, or
+    after ``mesh.unmerge_vertices()``) is closed by position and accepted.
+    Where trimesh answers an open mesh with ray tests, this function
+    raises; use
     ``proximity.TriangleMesh(...).signed_distance(points, sign="winding")``
     (negative inside) for open meshes.
 
@@ -168,8 +281,9 @@ def signed_distance(mesh, points):
     >>> signed_distance((vertices, faces), [[0.1, 0.2, 0.2], [-1, 0.2, 0.3], [0, 0, 0]]).round(6).tolist()
     [0.1, -1.0, 0.0]
     """
-    points = _points(points)
-    return -np.asarray(_mesh(mesh).signed_distance(points)) + 0.0
+    points, one = _points(points)
+    signed = -np.asarray(_mesh(mesh).signed_distance(points)) + 0.0
+    return signed[0] if one else signed
 
 
 class ProximityQuery:
@@ -195,6 +309,9 @@ class ProximityQuery:
     >>> distance, vertex_id = query.vertex([[0.9, 0.1, 0.0], [0, 0, 3]])
     >>> distance.round(6).tolist(), vertex_id.tolist()
     ([0.141421, 2.0], [1, 3])
+    >>> distance, vertex_id = query.vertex([0, 0, 3])  # one point
+    >>> float(distance), int(vertex_id)
+    (2.0, 3)
     """
 
     def __init__(self, mesh):
@@ -214,15 +331,17 @@ class ProximityQuery:
     def vertex(self, points):
         """``(distance, vertex_id)``: the nearest vertex of the mesh to each point.
 
-        The vertices are queried as a mesh of point-like faces, so the
-        distance is exact to rounding and ties go to the lowest index
-        (trimesh's k-d tree breaks them its own way).  Vertices that no
-        face uses count, as in trimesh.
+        ``points`` is ``(n, 3)``, or ``(3,)`` for one point, which gives a
+        float64 and an int64 scalar, as trimesh's k-d tree does.  The
+        vertices are queried as a mesh of point-like faces, so the distance
+        is exact to rounding and ties go to the lowest index (trimesh's k-d
+        tree breaks them its own way).  Vertices that no face uses count,
+        as in trimesh.
         """
-        points = _points(points)
+        points, one = _points(points)
         mesh = _mesh(self._source)
         if self._vertices is None or self._vertices[0] is not mesh:
             index = np.arange(len(mesh.vertices))
             self._vertices = (mesh, TriangleMesh(mesh.vertices, np.stack([index, index, index], axis=1)))
         r = self._vertices[1].closest_point(points)
-        return np.array(r.distance), np.array(r.face)
+        return _one((np.array(r.distance), np.array(r.face)), one)

@@ -120,7 +120,7 @@ def test_available_lists_exactly_the_importable_libraries():
 def test_missing_library_names_the_extra_to_install(monkeypatch, name, module, distribution):
     monkeypatch.setitem(sys.modules, module, None)  # makes `import module` raise ImportError
     with pytest.raises(
-        ImportError, match=rf"{distribution} is not installed.*pip install 'proximity3d\[adapters\]'"
+        ImportError, match=rf"{distribution} is not installed.*pip install '\.\[adapters\]' in proximity's"
     ):
         adapters.get(name)
     assert name not in adapters.available()

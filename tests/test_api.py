@@ -17,6 +17,7 @@ import pytest
 
 import proximity
 from proximity import Circle, Disk, Feature, Scene, Triangle, TriangleMesh
+from proximity.results import asdict
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 UNIT = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
@@ -247,7 +248,7 @@ def test_triangle_mesh_takes_a_trimesh_or_any_object_with_vertices_and_faces():
     mesh = TriangleMesh(box)
     assert mesh.faces.tolist() == box.faces.tolist() and mesh.vertices.tolist() == box.vertices.tolist()
     assert float(mesh.distance([0, 0, 3])) == 2.5
-    with pytest.raises(TypeError, match="vertices and faces, or one object with .vertices and .faces"):
+    with pytest.raises(TypeError, match="vertices and faces arrays, or one mesh object with vertices and"):
         TriangleMesh(np.zeros((3, 3)))
 
 
@@ -292,7 +293,7 @@ def test_reprs_show_the_data_abbreviated_for_big_batches():
 
 
 def _arrays(result):
-    return [v for v in vars(result).values() if isinstance(v, np.ndarray)]
+    return [v for v in asdict(result).values() if isinstance(v, np.ndarray)]
 
 
 @pytest.mark.parametrize("n", [1, 7, 100_000])  # 100,000 points: outputs on recycled memory
@@ -317,7 +318,7 @@ def test_no_result_array_or_its_base_is_writeable(kind, n):
 
 def _same(a, b):
     assert type(a) is type(b)
-    for name, value in vars(a).items():
+    for name, value in asdict(a).items():
         np.testing.assert_array_equal(np.asarray(getattr(b, name)), np.asarray(value), strict=True)
 
 

@@ -53,9 +53,12 @@ def test_distances_of_an_npy_cloud_equal_the_in_memory_query(files, mesh, tmp_pa
     expected = _expected(files[mesh], files["points"]).distance
     assert got.dtype == np.float64 and got.tobytes() == expected.tobytes()
     assert not os.path.exists(str(out) + ".partial")
-    err = capsys.readouterr().err
-    # Quiet when stderr is not a terminal, but for the warning about the three bad rows.
-    assert err.strip() == (
+    lines = capsys.readouterr().err.splitlines()
+    # Where stderr is not a terminal: progress as plain lines, the last line of
+    # the job, and the warning about the three bad rows.
+    assert lines[-3].startswith("proximity.cloud: 20,000/20,000 points (100%, ")
+    assert lines[-2].startswith(f"proximity.cloud: wrote distances of 20,000 points to {out} in ")
+    assert lines[-1] == (
         f"proximity.cloud: warning: 3 of 20,000 rows of POINTS {str(files['npy'])!r} hold NaN or inf: "
         "their distances are NaN"
     )
@@ -122,6 +125,9 @@ def test_a_dask_cluster_at_an_address_writes_the_same_bits(files, tmp_path, dask
     assert got["face"].tobytes() == expected.face.tobytes()
     report = json.loads(summary.read_text())
     assert report["points"] == N and report["nan_rows"] == 3 and report["where"] == address
+    assert _run(files["stl"], files["npy"], "-o", out, "--scheduler", address, "--signed") == 0
+    signed = cloud.read_mesh(files["stl"], merge=True).signed_distance(files["points"])
+    assert np.load(out).tobytes() == signed.tobytes()
 
 
 def test_workers_start_a_local_cluster_and_report_their_peak_memory(files, tmp_path):
@@ -137,17 +143,55 @@ def test_workers_start_a_local_cluster_and_report_their_peak_memory(files, tmp_p
     assert len(peaks["workers"]) == 2 and all(p > 0 for p in peaks["workers"].values())
 
 
-def test_progress_on_request(files, tmp_path, capsys):
-    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--progress") == 0
+def test_progress_on_a_terminal_is_a_bar(files, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy") == 0
     err = capsys.readouterr().err
     assert "proximity.cloud" in err and "20.0k/20.0k" in err
 
 
-def test_progress_without_tqdm_is_a_line(files, tmp_path, capsys, monkeypatch):
+def test_progress_on_a_terminal_without_tqdm_is_a_line(files, tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "tqdm", None)
-    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--progress", "--chunk", CHUNK) == 0
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--chunk", CHUNK) == 0
+    err = capsys.readouterr().err
+    assert "\rproximity.cloud: 20,000/20,000 points (100%," in err
+
+
+def test_progress_in_a_log_is_plain_lines(files, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(cloud, "LOG_EVERY", 0.0)  # a line per chunk
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--chunk", CHUNK) == 0
     lines = capsys.readouterr().err.splitlines()
-    assert lines[-2].startswith("proximity.cloud: 20,000/20,000 points (100%,")
+    progress = [line for line in lines if " points (" in line]
+    assert len(progress) == 7 and not any("\r" in line for line in lines)
+    assert progress[0].startswith("proximity.cloud: 3,000/20,000 points (15%, ") and " left)" in progress[0]
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--no-progress") == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and lines[0].startswith("proximity.cloud: wrote distances of 20,000 points")
+
+
+def test_signed_distances(files, tmp_path, capsys):
+    out = tmp_path / "s.npy"
+    assert _run(files["stl"], files["npy"], "-o", out, "--signed", "--faces", "--chunk", CHUNK) == 0
+    got = np.load(out)
+    mesh = cloud.read_mesh(files["stl"], merge=True)
+    assert got.dtype.names == ("signed_distance", "face")
+    expected = mesh.signed_distance(files["points"])
+    assert got["signed_distance"].tobytes() == expected.tobytes()
+    assert (got["signed_distance"] < 0).any() and (got["signed_distance"] > 0).any()
+    # The merged mesh is the same surface: the same faces at the same distances.
+    np.testing.assert_array_equal(got["face"], _expected(files["stl"], files["points"]).face)
+    assert "wrote signed distances, nearest faces of 20,000 points" in capsys.readouterr().err
+    # An open mesh: refused with the pseudonormal, answered by the winding number.
+    sphere = trimesh.load(files["stl"])
+    open_mesh = tmp_path / "open.stl"
+    trimesh.Trimesh(sphere.vertices, sphere.faces[sphere.triangles_center[:, 2] < 0.5]).export(open_mesh)
+    assert _run(open_mesh, files["npy"], "-o", out, "--signed") == 2
+    err = capsys.readouterr().err
+    assert "needs a closed mesh" in err and "pass --sign winding" in err
+    assert _run(open_mesh, files["npy"], "-o", out, "--sign", "winding") == 0
+    expected = cloud.read_mesh(open_mesh, merge=True).signed_distance(files["points"], sign="winding")
+    assert np.load(out).tobytes() == expected.tobytes()
 
 
 # --- Bad input ----------------------------------------------------------------------------------
@@ -355,7 +399,9 @@ def test_a_disk_too_small_for_the_output(files, tmpfs, out, allocate):
         sys.exit(code)
         """
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    # Quiet: a process that compiles a kernel says so on stderr.
+    env = {**os.environ, "PROXIMITY_QUIET": "1"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 2, done.stderr[-2000:]
     assert (
         done.stderr

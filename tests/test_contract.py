@@ -10,6 +10,7 @@ import pytest
 
 import proximity
 from proximity import Feature, primitives
+from proximity.results import asdict
 from proximity.testing import examples
 
 KINDS = [name if dim == 3 else f"{name}{dim}d" for name, dim in examples.kinds()]
@@ -92,7 +93,7 @@ def test_result_fields_and_shapes(kind):
         assert value.dtype == (np.bool_ if width == 0 else np.float64), name
     extra = {name for name, _ in primitive(kind).extra}
     common = {"distance", "sqr_distance", "point", "feature"}
-    assert set(vars(r)) == common | extra
+    assert set(asdict(r)) == common | extra
     with pytest.raises(AttributeError):
         r.distance = 0
     with pytest.raises(ValueError):
@@ -187,7 +188,7 @@ def test_single_point_fast_path_matches_the_batch_path(kind, method):
             single = shape.closest_point(query, method=method)
             expected = batch[k]
             assert type(single) is type(expected)
-            for name, value in vars(expected).items():
+            for name, value in asdict(expected).items():
                 np.testing.assert_array_equal(getattr(single, name), value, err_msg=name)
             assert not single.point.flags.writeable
             assert type(single.feature) is np.int8
@@ -215,5 +216,5 @@ def test_one_shape_takes_the_same_bits_as_pairs(kind, method):
     arrays = [np.asarray(getattr(one, name)) for name, _ in one._fields]
     repeated = type(one)(*(np.repeat(a[None], len(points), axis=0) for a in arrays))
     a, b = one.closest_point(points, method=method), repeated.closest_point(points, method=method)
-    for name, value in vars(b).items():
+    for name, value in asdict(b).items():
         np.testing.assert_array_equal(getattr(a, name), value, err_msg=name)

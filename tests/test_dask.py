@@ -10,7 +10,8 @@ import textwrap
 import numpy as np
 import pytest
 
-from proximity import Circle, Disk, Scene, Triangle, TriangleMesh
+from proximity import Circle, Disk, Scene, Sphere, Triangle, TriangleMesh
+from proximity.results import asdict
 
 da = pytest.importorskip("dask.array")
 dask = pytest.importorskip("dask")
@@ -30,7 +31,7 @@ def _cloud(n=20_000, seed=0):
 def _same_fields(arrays, result):
     """Every field of the dask answer ``arrays`` (computed) equals ``result``'s, bit for bit."""
     got = dask.compute(*arrays)
-    assert arrays._fields == tuple(vars(result))
+    assert arrays._fields == tuple(asdict(result))
     for name, value in zip(arrays._fields, got, strict=True):
         expected = getattr(result, name)
         assert value.dtype == expected.dtype and value.shape == expected.shape, name
@@ -77,6 +78,21 @@ def test_records_hold_the_fields_asked_for():
     got, expected = table.compute(), mesh.closest_point(points)
     assert got["distance"].tobytes() == expected.distance.tobytes()
     assert got["face"].tobytes() == expected.face.tobytes()
+
+
+def test_records_hold_signed_distances_where_the_shape_has_them():
+    sphere = Sphere([0.0, 0.0, 0.0], 1.0)
+    points = _cloud(300)
+    got = pdask.records(sphere, da.from_array(points, chunks=(100, 3)), fields=["signed_distance", "point"])
+    assert got.dtype.names == ("signed_distance", "point")
+    got = got.compute()
+    assert got["signed_distance"].tobytes() == sphere.signed_distance(points).tobytes()
+    assert got["point"].tobytes() == sphere.closest_point(points).point.tobytes()
+    assert "signed_distance" not in pdask.records(sphere, da.from_array(points)).dtype.names
+    with pytest.raises(TypeError, match="sign is an option of meshes; got a Sphere"):
+        pdask.records(sphere, da.from_array(points), fields=["signed_distance"], sign="winding")
+    with pytest.raises(ValueError, match="fields must be names among"):
+        pdask.records(Triangle(np.eye(3)), da.from_array(points), fields=["signed_distance"])
 
 
 def _shape_keys(collection):
@@ -148,7 +164,7 @@ def test_the_core_install_imports_without_dask_and_says_how_to_get_it():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert "pip install 'proximity3d[scale]'" in done.stdout
+    assert "pip install '.[scale]' in proximity's clone" in done.stdout
     done = subprocess.run(
         [sys.executable, "-c", "import sys, proximity; print('dask' in sys.modules)"],
         capture_output=True, text=True, timeout=120,

@@ -1,6 +1,7 @@
 """The package's layout: small modules, no import circles, a test suite that needs no clone."""
 
 import ast
+import inspect
 import pathlib
 
 import proximity
@@ -93,3 +94,36 @@ def test_adapters_import_from_the_clones_root_without_the_install_mapping():
     run = subprocess.run([sys.executable, "-S", "-c", code], cwd=root, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
     assert pathlib.Path(run.stdout.strip()) == root / "adapters" / "__init__.py"
+
+
+def _public_callables():
+    """The functions of ``proximity.__all__`` and the public methods of its classes."""
+    import proximity
+
+    for name in proximity.__all__:
+        obj = getattr(proximity, name)
+        if inspect.isfunction(obj):
+            yield name, obj
+        elif inspect.isclass(obj) and obj.__module__.startswith("proximity"):
+            for attr, member in vars(obj).items():
+                if attr.startswith("_") and attr != "__init__":
+                    continue
+                function = member.fget if isinstance(member, property) else member
+                if inspect.isfunction(function):
+                    yield f"{name}.{attr}", function
+
+
+def test_the_public_api_has_type_hints():
+    # The shapes, meshes, scenes and posed views, and the module's functions
+    # (results are dataclasses, annotated by their fields).
+    missing = []
+    for name, function in _public_callables():
+        if name.split(".")[0].endswith("Result") or name.startswith("Feature") or name == "Shape.__init__":
+            continue  # dataclasses, an enum, and the protocol's own constructor
+        signature = inspect.signature(function)
+        for p in signature.parameters.values():
+            if p.name not in ("self", "cls") and p.annotation is inspect.Parameter.empty:
+                missing.append(f"{name}({p.name})")
+        if signature.return_annotation is inspect.Signature.empty:
+            missing.append(f"{name} -> ?")
+    assert not missing, missing

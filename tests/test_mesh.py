@@ -258,7 +258,8 @@ def test_the_broad_phase_is_chosen_by_size():
         ([[0, 0, 0], [1, 0, 0]], [[0, 1, 1]], {}, None),
         ([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]], {}, r"vertices must have shape \(V, 3\); got shape \(3, 2\)"),
         ([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 1, 2]], {}, "vertices must be finite"),
-        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.0, 1.0, 2.0]], {}, "faces must be an integer array"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.0, 1.5, 2.0]], {}, r"got 1\.5 at index \(0, 1\) of a float"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[True, False, True]], {}, "faces must be an integer array"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]], {}, r"0 <= index < 3; got 3 at index \(0, 2\)"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, -1, 2]], {}, "got -1"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.zeros((0, 3), int), {}, r"F >= 1; got shape \(0, 3\)"),
@@ -306,11 +307,79 @@ def test_trimesh_drop_in_returns_trimeshs_tuple():
     assert closest.flags.writeable
     r = TriangleMesh(vertices, faces).closest_point(points)
     np.testing.assert_array_equal(distance, r.distance)
-    np.testing.assert_array_equal(triangle_id, r.face)
-    with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
-        closest_point((vertices, faces), [0.0, 0.0, 1.0])
+    # The same face but where the closest point is on an edge or a vertex, which the face chosen holds too.
+    on_face = r.feature == proximity.Feature.FACE
+    np.testing.assert_array_equal(triangle_id[on_face], r.face[on_face])
+    chosen = proximity.Triangle(vertices[faces[triangle_id]]).distance(points)
+    np.testing.assert_allclose(chosen, r.distance, rtol=0, atol=1e-15)
+    with pytest.raises(ValueError, match=r"points must be \(n, 3\), or \(3,\) for one point"):
+        closest_point((vertices, faces), [[0.0, 0.0, 1.0, 2.0]])
     with pytest.raises(TypeError, match="mesh must be"):
         closest_point(vertices, points)
+
+
+def test_trimesh_drop_ins_take_one_point():
+    from proximity.trimesh_compat import ProximityQuery, closest_point, signed_distance
+
+    vertices, faces = MESHES["icosphere"]
+    points = _points("icosphere", n=12)
+    query = ProximityQuery((vertices, faces))
+    for function in (closest_point, query.on_surface, query.vertex, signed_distance, query.signed_distance):
+        mesh = () if getattr(function, "__self__", None) is query else ((vertices, faces),)
+        batch = function(*mesh, points)
+        one = function(*mesh, points[3])
+        if not isinstance(one, tuple):
+            one, batch = (one,), (batch,)
+        for a, b in zip(one, batch, strict=True):
+            assert np.shape(a) == np.shape(b)[1:] and np.asarray(a).dtype == b.dtype
+            np.testing.assert_array_equal(a, b[3])
+            if np.ndim(a) == 0:
+                assert isinstance(a, np.generic)
+
+
+# A roof: two faces meeting along the edge from (0, 0, 0) to (0, 1, 0), face 0
+# sloping down along -x (normal (-1, 0, 1) / sqrt 2), face 1 flat along +x
+# (normal +z).  Points with x < 0 < x + z are beyond the ridge: both faces
+# hold their closest point, on the ridge, at the same distance.
+ROOF = ([[0, 0, 0], [0, 1, 0], [-1, 0, -1], [1, 0, 0]], [[0, 1, 2], [0, 3, 1]])
+
+
+@pytest.mark.parametrize(
+    "point, face, tie",
+    [
+        ([-0.05, 0.5, 1.0], 1, True),  # the flat face's normal points more nearly at the point
+        ([-0.9, 0.5, 1.0], 0, True),  # the sloped face's does
+        ([0.3, 0.5, 0.1], 1, False),  # above the flat face itself
+    ],
+)
+def test_trimesh_drop_in_picks_the_face_facing_the_point_where_faces_tie(point, face, tie):
+    from proximity.trimesh_compat import closest_point
+
+    closest, distance, triangle_id = closest_point(ROOF, [point])
+    assert triangle_id.tolist() == [face]
+    each = proximity.Triangle(np.asarray(ROOF[0], float)[ROOF[1]]).distance(point)
+    assert distance[0] == each.min() and bool(each[0] == each[1]) is tie
+
+
+def test_trimesh_drop_in_ties_go_as_trimeshs():
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("rtree")
+    pytest.importorskip("scipy")
+    from proximity import trimesh_compat
+
+    tm = trimesh.creation.icosphere(subdivisions=1)
+    rng = np.random.default_rng(5)
+    directions = rng.normal(size=(400, 3))
+    points = directions / np.linalg.norm(directions, axis=1, keepdims=True) * rng.uniform(1.05, 2.0, (400, 1))
+    ours = trimesh_compat.closest_point(tm, points)[2]
+    theirs = trimesh.proximity.closest_point(tm, points)[2]
+    r = TriangleMesh(tm).closest_point(points)
+    edge = np.isin(r.feature, [proximity.Feature.EDGE01, proximity.Feature.EDGE12, proximity.Feature.EDGE20])
+    # Beyond an edge, both faces are trimesh's two candidates: the same choice.
+    assert edge.sum() > 50 and (ours[edge] == theirs[edge]).all()
+    assert (ours[edge] != r.face[edge]).any()  # and not always the lowest index
+    on_face = r.feature == proximity.Feature.FACE
+    assert (ours[on_face] == theirs[on_face]).all()
 
 
 def test_trimesh_drop_in_agrees_with_trimesh():

@@ -7,6 +7,7 @@ import pytest
 
 from proximity import Circle, Disk, Triangle
 from proximity import shapes as shapes_module
+from proximity.results import asdict
 from proximity.testing import scenes
 
 METHODS = ["robust", "eberly", "certified"]
@@ -81,7 +82,7 @@ def test_one_triangle_takes_the_same_bits_as_pairs(family, method):
     points = _points_against(scene.vertices[0, 0], scene.points, rng)
     one = Triangle(scene.vertices[0]).closest_point(points, method=method)
     pairs = Triangle(np.repeat(scene.vertices[:1], len(points), axis=0)).closest_point(points, method=method)
-    for name, value in vars(pairs).items():
+    for name, value in asdict(pairs).items():
         np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
 
 
@@ -99,7 +100,7 @@ def test_one_circle_or_disk_takes_the_same_bits_as_pairs(family, cls, method):
         np.tile(scene.center[0], (n, 1)), np.tile(scene.normal[0], (n, 1)), np.repeat(scene.radius[:1], n)
     )
     pairs = repeated.closest_point(points, method=method)
-    for name, value in vars(pairs).items():
+    for name, value in asdict(pairs).items():
         np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
 
 

@@ -213,12 +213,19 @@ def test_nan_rows_shapes_scalars_and_read_only_results():
         mesh.contains(np.zeros((3, 2)))
 
 
-def test_reversed_faces_reverse_the_sign():
+@pytest.mark.parametrize("sign", ["auto", "pseudonormal", "winding"])
+def test_reversed_faces_keep_the_sign(sign):
+    """Inside is where the winding number is not 0: the same whichever way the faces point."""
     vertices, faces = MESHES["torus"]
     points = _points("torus")
-    ours = TriangleMesh(vertices, faces).signed_distance(points)
-    reversed_ = TriangleMesh(vertices, faces[:, ::-1]).signed_distance(points)
-    assert (np.sign(reversed_) == -np.sign(ours)).all() and (ours != 0).all()
+    ours = TriangleMesh(vertices, faces).signed_distance(points, sign=sign)
+    flipped = TriangleMesh(vertices, faces[:, ::-1])
+    theirs = flipped.signed_distance(points, sign=sign)
+    # The distances may differ in the last bit (the faces' vertices come in another order).
+    assert (np.sign(theirs) == np.sign(ours)).all()
+    np.testing.assert_allclose(theirs, ours, rtol=1e-14, atol=0)
+    assert (ours != 0).all() and 0.1 < (ours < 0).mean() < 0.9
+    assert flipped.validity.inverted and not TriangleMesh(vertices, faces).validity.inverted
 
 
 # -- degenerate faces ---------------------------------------------------------------------
@@ -252,8 +259,13 @@ def test_a_zero_area_face_leaves_its_points_to_the_winding_number(monkeypatch):
     rng = np.random.default_rng(4)
     points = _near_segment(vertices[0], vertices[2], rng)
     calls = []
-    winding = _signed.winding_numbers
-    monkeypatch.setattr(_signed, "winding_numbers", lambda v, f, p: calls.append(len(p)) or winding(v, f, p))
+    winding = TriangleMesh._winding_sides
+
+    def counted(mesh, points, distance):
+        calls.append(len(points))
+        return winding(mesh, points, distance)
+
+    monkeypatch.setattr(TriangleMesh, "_winding_sides", counted)
     r = mesh.closest_point(points)
     assert (r.face == 0).any()  # the degenerate face is the nearest for some
     signed = mesh.signed_distance(points)
@@ -278,7 +290,7 @@ def test_a_collapsed_face_is_left_out_of_the_surface(monkeypatch):
     points = _near_segment(vertices[0], vertices[2], rng, n=200, height=1e-6)
     r = mesh.closest_point(points)
     assert (r.face == 0).sum() >= 10
-    monkeypatch.setattr(_signed, "winding_numbers", None)  # not called
+    monkeypatch.setattr(TriangleMesh, "_winding_sides", None)  # not called
     inside = _inside_octahedron(points)
     assert ((mesh.signed_distance(points) < 0) == inside).all() and 0 < inside.sum() < len(points)
 
@@ -318,8 +330,13 @@ def test_points_the_pseudonormal_leaves_undecided_get_the_same_sign_from_the_win
     )
     decided = TriangleMesh(vertices, faces).signed_distance(points)
     calls = []
-    winding = _signed.winding_numbers
-    monkeypatch.setattr(_signed, "winding_numbers", lambda v, f, p: calls.append(len(p)) or winding(v, f, p))
+    winding = TriangleMesh._winding_sides
+
+    def counted(mesh, points, distance):
+        calls.append(len(points))
+        return winding(mesh, points, distance)
+
+    monkeypatch.setattr(TriangleMesh, "_winding_sides", counted)
     monkeypatch.setattr(_signed, "MARGIN", 1.0)  # a margin no product clears: every point undecided
     np.testing.assert_array_equal(TriangleMesh(vertices, faces).signed_distance(points), decided)
     assert calls == [len(points)]
@@ -384,7 +401,7 @@ def test_trimesh_drop_ins_refuse_what_they_cannot_answer():
     from proximity import trimesh_compat
 
     with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):
-        trimesh_compat.signed_distance(OCTAHEDRON, [0.0, 0.0, 0.0])
+        trimesh_compat.signed_distance(OCTAHEDRON, [[0.0, 0.0]])
     with pytest.raises(ValueError, match="needs a closed mesh"):
         trimesh_compat.signed_distance((OCTAHEDRON[0], OCTAHEDRON[1][1:]), [[0.0, 0.0, 0.0]])
     with pytest.raises(ValueError, match=r"points must be \(n, 3\)"):

@@ -119,3 +119,58 @@ def test_first_queries_from_threads_at_once(tmp_path):
             else:
                 np.testing.assert_array_equal(np.load(io.BytesIO(out)), expected)
     assert not failures, f"{len(failures)} of 24 processes failed; the first: {failures[0]}"
+
+
+# --- The line a cold first query prints ---------------------------------------------------------
+
+# The cheapest first query: one point against one point (about a second of
+# compiling, most of it the compiler's own start).
+FIRST_POINT = "import proximity; print(float(proximity.Point([0, 0, 0]).distance([3.0, 4.0, 0.0])))"
+
+
+def _first_point(cache, **env):
+    environ = {k: v for k, v in os.environ.items() if k != "PROXIMITY_QUIET"}
+    environ.update(NUMBA_CACHE_DIR=str(cache), **env)
+    return subprocess.run(
+        [sys.executable, "-c", FIRST_POINT], capture_output=True, text=True, env=environ, timeout=600
+    )
+
+
+def test_a_cold_compile_says_so_once_and_a_warm_run_says_nothing(tmp_path):
+    cold = _first_point(tmp_path / "cache")
+    assert cold.returncode == 0, cold.stderr
+    assert cold.stdout.strip() == "5.0"
+    lines = cold.stderr.splitlines()
+    assert len(lines) == 1, cold.stderr
+    assert lines[0].startswith("proximity: compiling the robust kernels of one-point queries")
+    assert "python -m proximity.compile" in lines[0] and "PROXIMITY_QUIET=1" in lines[0]
+    warm = _first_point(tmp_path / "cache")
+    assert warm.returncode == 0, warm.stderr
+    assert warm.stdout.strip() == "5.0"
+    assert warm.stderr == ""
+
+
+def test_the_compile_line_is_printed_once_and_can_be_silenced(monkeypatch, capsys):
+    from proximity import _notice
+
+    def _robust_block__robust__e1b9(): ...
+
+    _robust_block__robust__e1b9.__module__ = "proximity.point_triangle"
+    monkeypatch.setattr(_notice, "_said", False)
+    monkeypatch.setenv("PROXIMITY_QUIET", "0")
+    _notice.compiling(_robust_block__robust__e1b9)
+    _notice.compiling(_robust_block__robust__e1b9)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the robust kernels of batch queries" in err
+    monkeypatch.setattr(_notice, "_said", False)
+    monkeypatch.setenv("PROXIMITY_QUIET", "1")
+    _notice.compiling(_robust_block__robust__e1b9)
+    assert capsys.readouterr().err == ""
+
+
+def test_the_compile_line_names_the_hierarchy_for_meshes():
+    from proximity import _notice
+    from proximity.broadphase import build
+
+    what, seconds = _notice.describe(build.build_tree)
+    assert what.startswith("kernels of meshes and scenes") and seconds

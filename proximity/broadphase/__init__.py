@@ -29,6 +29,17 @@ for its rows.  One module per job:
 
 from .build import LEAF_SIZE, assemble, brute, build_faces, build_tree, face_params
 from .nearest import nearest
+from .refit import refit_faces
 from .tree import Tree
 
-__all__ = ["LEAF_SIZE", "Tree", "assemble", "brute", "build_faces", "build_tree", "face_params", "nearest"]
+__all__ = [
+    "LEAF_SIZE",
+    "Tree",
+    "assemble",
+    "brute",
+    "build_faces",
+    "build_tree",
+    "face_params",
+    "nearest",
+    "refit_faces",
+]

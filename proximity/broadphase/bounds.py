@@ -93,10 +93,17 @@ def _bound_sqr(boxes, k, s, qx, qy, qz):
     ``boxes[k]`` is ``(lo, hi)`` and three slabs ``(u, h_min, h_max)``
     across orthogonal axes; see the module docstring.
     """
+    return max(_box_sqr(boxes, k, s, qx, qy, qz), _slabs_sqr(boxes, k, s, qx, qy, qz))
+
+
+@inline
+def _slabs_sqr(boxes, k, s, qx, qy, qz):
+    """Squared distance from the scaled point to node ``k``'s oriented box
+    (its three slabs), a lower bound as :func:`_bound_sqr`'s."""
     hu = _excess(boxes, k, 6, s, qx, qy, qz)
     hv = _excess(boxes, k, 11, s, qx, qy, qz)
     hw = _excess(boxes, k, 16, s, qx, qy, qz)
-    return max(_box_sqr(boxes, k, s, qx, qy, qz), hu * hu + hv * hv + hw * hw)
+    return hu * hu + hv * hv + hw * hw
 
 
 @inline
@@ -115,7 +122,6 @@ def _scale(px, py, pz, magnitude):
     """The power of two ``s`` that brings ``M`` (point and boxes) into ``[0.5, 1)``."""
     m = max(max(abs(px), abs(py)), max(abs(pz), magnitude))
     return math.ldexp(1.0, -max(math.frexp(m)[1], -1000))
-
 
 
 @inline
@@ -143,7 +149,6 @@ def plane_row(cull, k, x0, y0, z0, x1, y1, z1, x2, y2, z2):
         low, high = -math.inf, math.inf
     cull[k, 6], cull[k, 7], cull[k, 8] = ux, uy, uz
     cull[k, 9], cull[k, 10] = low, high
-
 
 
 @inline

@@ -314,7 +314,6 @@ def _build(rows, leaf_size):
     return out_child, out_count, order, deepest
 
 
-
 @inline
 def _mix(x, word):
     """``x`` with the 64-bit ``word`` mixed in: by a multiplication, which
@@ -336,7 +335,6 @@ def _row_hashes(kinds, bits):
             x = _mix(x, bits[k, c])
         h[k] = x
     return h
-
 
 
 @inline
@@ -362,7 +360,6 @@ def _face_rows(vertices, faces, kind, cull, hashes):
     bits = vertices.view(np.uint64)
     for k in prange(faces.shape[0]):
         _face_row(vertices, bits, faces, np.int64(k), kind, cull, hashes)
-
 
 
 def _all_different(hashes):
@@ -402,7 +399,6 @@ def distinct(kinds, params):
     return keep
 
 
-
 @inline
 def _face_params(vertices, faces, order, params, j):
     k = order[j]
@@ -432,18 +428,16 @@ def face_params(vertices, faces, order=None):
         return params
     order = np.arange(len(faces)) if order is None else order
     params = empty(len(order), primitives.N_PARAMS)
-    _face_gather(
-        readonly(vertices, np.float64), readonly(faces, np.int64), readonly(order, np.int64), params
-    )
+    _face_gather(readonly(vertices, np.float64), readonly(faces, np.int64), readonly(order, np.int64), params)
     return params
 
 
-
-def assemble(kinds, params, index, child, count, depth, cull=None):
+def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
     ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
-    computed here when not given; the node bounds are fitted to them.
+    computed here when not given; the node bounds are fitted to them unless
+    given (those of the tight rows: a tree without loose rows).
     """
     tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = readonly(kinds, np.int8)
@@ -451,7 +445,7 @@ def assemble(kinds, params, index, child, count, depth, cull=None):
     child = readonly(child, np.int64)
     count = readonly(count, np.int64)
     tight_ro = readonly(tight, np.float64)
-    bounds = readonly(refit(child, count, kinds, params, tight_ro), np.float64)
+    bounds = readonly(refit(child, count, kinds, params, tight_ro) if bounds is None else bounds, np.float64)
     if loose is tight:
         loose_ro, loose_bounds = tight_ro, bounds
     else:

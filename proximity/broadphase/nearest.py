@@ -6,7 +6,6 @@ import numba
 import numpy as np
 
 from .. import primitives
-from .._jit import kernel
 from .._rounding import certify_difference
 from ._alloc import readonly
 from .traverse import Outputs, TreeArrays, _gather, search_kernel
@@ -15,54 +14,43 @@ from .traverse import Outputs, TreeArrays, _gather, search_kernel
 MORTON_BITS = 7
 
 
-@kernel()
+def _spread():
+    """Each ``MORTON_BITS``-bit number with its bits spread to every third position."""
+    x = np.arange(1 << MORTON_BITS)
+    out = np.zeros(len(x), np.int64)
+    for b in range(MORTON_BITS):
+        out |= ((x >> b) & 1) << (3 * b)
+    return out
+
+
+_SPREAD = _spread()
+
+
 def _morton_order(points):
     """The points in Morton order on a 128^3 grid over their finite bounding
     box (points with a non-finite coordinate go to the last cell): the
     sequence of their indices, stable within a cell.
 
-    The 21-bit codes are sorted by two passes of a radix sort, on their low
-    11 and high 10 bits.
+    In NumPy, so that no batch size compiles a kernel of its own: the
+    21-bit codes are sorted by two stable passes on their low 11 and high 10
+    bits, each a radix sort of 16-bit keys.
     """
-    n = points.shape[0]
-    low = np.full(3, math.inf)
-    high = np.full(3, -math.inf)
-    for i in range(n):
-        if math.isfinite(points[i, 0]) and math.isfinite(points[i, 1]) and math.isfinite(points[i, 2]):
-            for a in range(3):
-                low[a] = min(low[a], points[i, a])
-                high[a] = max(high[a], points[i, a])
     top = (1 << MORTON_BITS) - 1
-    span = max(max(high[0] - low[0], high[1] - low[1]), high[2] - low[2])
+    every = bool(np.isfinite(points).all())
+    kept = points if every else points[np.isfinite(points).all(axis=1)]
+    if len(kept) == 0:
+        return np.arange(len(points))
+    low, high = kept.min(axis=0), kept.max(axis=0)
+    span = float(np.max(high - low))
     inv = top / span if 0.0 < span < math.inf else 0.0
-    codes = np.empty(n, np.int64)
-    for i in range(n):
-        code = 0
-        for a in range(3):
-            g = (points[i, a] - low[a]) * inv
-            if not (g >= 0.0):  # NaN as well
-                g = 0.0 if g < 0.0 else float(top)
-            x = int(min(g, float(top)))
-            # Spread the bits of x to every third position.
-            for b in range(MORTON_BITS):
-                code |= ((x >> b) & 1) << (3 * b + a)
-        codes[i] = code
-    order = np.arange(n)
-    scratch = np.empty(n, np.int64)
-    for shift, width in ((0, 11), (11, 3 * MORTON_BITS - 11)):
-        mask = (1 << width) - 1
-        starts = np.zeros((1 << width) + 1, np.int64)
-        for i in range(n):
-            starts[((codes[order[i]] >> shift) & mask) + 1] += 1
-        for b in range(1 << width):
-            starts[b + 1] += starts[b]
-        for i in range(n):
-            k = order[i]
-            bucket = (codes[k] >> shift) & mask
-            scratch[starts[bucket]] = k
-            starts[bucket] += 1
-        order, scratch = scratch, order
-    return order
+    with np.errstate(invalid="ignore", over="ignore"):
+        g = (points - low) * inv
+        if not every:  # NaN and +inf to the last cell, -inf to the first
+            g = np.where(g >= 0.0, g, np.where(g < 0.0, 0.0, float(top)))
+        cells = np.minimum(g, float(top)).astype(np.int64)
+    code = _SPREAD[cells[:, 0]] | (_SPREAD[cells[:, 1]] << 1) | (_SPREAD[cells[:, 2]] << 2)
+    first = np.argsort((code & 0x7FF).astype(np.uint16), kind="stable")
+    return first[np.argsort((code[first] >> 11).astype(np.uint16), kind="stable")]
 
 
 #: Batches at least this large are queried in Morton order of the points.
@@ -81,8 +69,7 @@ def _visiting_order(points):
     return _morton_order(points)
 
 
-
-def nearest(tree, method, points, full, loose=False):
+def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     """Nearest primitive to each of the validated points ``(n, 3)``.
 
     Parameters
@@ -94,6 +81,9 @@ def nearest(tree, method, points, full, loose=False):
         Whether to fill every output or only ``distance``.
     loose : bool
         Use the loose boxes (``eberly``).
+    cutoff : float
+        Rows with nothing within this distance get an infinite distance (and
+        NaN, ``NONE`` and -1 in the other outputs); the search prunes beyond it.
 
     Returns
     -------
@@ -127,17 +117,17 @@ def nearest(tree, method, points, full, loose=False):
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     with numba.parallel_chunksize(1):
-        search_kernel(method, kinds, tree.radius)(arrays, tree.depth, magnitude, points, order, out, full)
+        search = search_kernel(method, kinds, tree.radius)
+        search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
-        _resolve(tree, rows, points, out, full, cull, bounds, magnitude)
+        _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff)
     result = out._asdict()
     del result["undecided"]
     return result
 
 
-
-def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
+def _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff):
     """Finish rows whose nearest primitive may be an undecided certified answer.
 
     Every candidate within the row's bound goes through the per-shape
@@ -169,6 +159,13 @@ def _resolve(tree, rows, points, out, full, cull, bounds, magnitude):
         if not answers:
             continue
         d, idx, r, j = min(answers, key=lambda a: (a[0], a[1]))
+        if d > cutoff:
+            out.distance[i] = math.inf
+            if full:
+                out.index[i], out.feature[i], out.flag[i] = -1, -1, False
+                out.sqr_distance[i] = math.inf
+                out.point[i] = out.extra[i] = np.nan
+            continue
         out.distance[i] = d
         if full:
             out.index[i] = idx

@@ -11,9 +11,10 @@ import numba
 import numpy as np
 from numba import prange
 
-from .. import primitives
+from .. import _pool, primitives
 from .._jit import inline, kernel
-from ._alloc import empty
+from ._alloc import empty, readonly
+from .bounds import CULL_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
@@ -213,6 +214,163 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, ve
         _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
 
 
+@inline
+def _box_range(bounds, c, ax, ay, az):
+    """The range of ``a . X`` over node ``c``'s box."""
+    lo, hi = 0.0, 0.0
+    for d, a in ((0, ax), (1, ay), (2, az)):
+        if a >= 0.0:
+            lo += a * bounds[c, d]
+            hi += a * bounds[c, 3 + d]
+        else:
+            lo += a * bounds[c, 3 + d]
+            hi += a * bounds[c, d]
+    return lo, hi
+
+
+@inline
+def _oriented(bounds, c, e):
+    """Node ``c``'s slab at column ``e`` as its axis over its squared length
+    ``n`` (about 1), and its middle and half width: the oriented box's
+    point ``X`` is ``sum (e . X) e / n``."""
+    x, y, z = bounds[c, e], bounds[c, e + 1], bounds[c, e + 2]
+    n = x * x + y * y + z * z
+    return (
+        x / n,
+        y / n,
+        z / n,
+        (bounds[c, e + 3] + bounds[c, e + 4]) * 0.5,
+        (bounds[c, e + 4] - bounds[c, e + 3]) * 0.5,
+    )
+
+
+@inline
+def _ranges_merged(bounds, i, child):
+    """The ranges of node ``i``'s three slabs from its children's: along
+    each of its axes ``a``, the union over both children of the range of
+    ``a . X`` over the child's box, narrowed by the range over its oriented
+    box where its frame is set and its slabs are finite; widened by
+    ``2^-36`` of node ``i``'s box's magnitude, far more than the rounding
+    of the projections and the frames' departure from orthogonality (see
+    :func:`refit_faces`)."""
+    magnitude = 0.0
+    for d in range(6):
+        magnitude = max(magnitude, abs(bounds[i, d]))
+    widen = magnitude * 2.0**-36
+    lu, hu = math.inf, -math.inf
+    lv, hv = math.inf, -math.inf
+    lw, hw = math.inf, -math.inf
+    for c in range(child[i], child[i] + 2):
+        ux, uy, uz = bounds[c, 6], bounds[c, 7], bounds[c, 8]
+        framed = ux * ux + uy * uy + uz * uz > 0.25
+        e0, e1, e2 = _oriented(bounds, c, 6), _oriented(bounds, c, 11), _oriented(bounds, c, 16)
+        for axis in (6, 11, 16):
+            ax, ay, az = bounds[i, axis], bounds[i, axis + 1], bounds[i, axis + 2]
+            lo, hi = _box_range(bounds, c, ax, ay, az)
+            if framed:
+                centre, half = 0.0, 0.0
+                for ex, ey, ez, middle, width in (e0, e1, e2):
+                    along = ax * ex + ay * ey + az * ez
+                    centre += along * middle
+                    half += abs(along) * width
+                if math.isfinite(centre) and math.isfinite(half):
+                    lo = max(lo, centre - half)
+                    hi = min(hi, centre + half)
+            if axis == 6:
+                lu, hu = min(lu, lo), max(hu, hi)
+            elif axis == 11:
+                lv, hv = min(lv, lo), max(hv, hi)
+            else:
+                lw, hw = min(lw, lo), max(hw, hi)
+    for c, low, high in ((9, lu, hu), (14, lv, hv), (19, lw, hw)):
+        finite = math.isfinite(low) and math.isfinite(high) and math.isfinite(widen)
+        bounds[i, c] = low - widen if finite else -math.inf
+        bounds[i, c + 1] = high + widen if finite else math.inf
+
+
+@inline
+def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices):
+    """:func:`_fit_subtree` with the ranges of nodes above the leaves from
+    their children's (:func:`_ranges_merged`), children first."""
+    nodes = np.empty(2 * (end[root] - start[root]), np.int64)
+    stack = np.empty(2 * (end[root] - start[root]), np.int64)
+    n = 0
+    stack[0] = root
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        i = stack[sp]
+        nodes[n] = i
+        n += 1
+        if count[i] == 0:
+            stack[sp] = child[i] + 1
+            stack[sp + 1] = child[i]
+            sp += 2
+    for t in range(n - 1, -1, -1):
+        i = nodes[t]
+        if count[i] > 0:
+            start[i] = child[i]
+            end[i] = child[i] + count[i]
+            _merge(bounds, i, cull, start[i], end[i])
+        else:
+            start[i] = start[child[i]]
+            end[i] = end[child[i] + 1]
+            _merge(bounds, i, bounds, child[i], child[i] + 2)
+    for t in range(n - 1, 0, -1):
+        _frame_and_ranges(bounds, nodes[t], start, end, child, count, kinds, params, cull, vertices)
+
+
+@inline
+def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices):
+    """Node ``i``'s frame, and its ranges: exact for a leaf, its children's otherwise."""
+    _frame(bounds, i)
+    if count[i] > 0:
+        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+    else:
+        _ranges_merged(bounds, i, child)
+
+
+@inline
+def _gather_rows(vertices, faces, order, params, cull, first, last):
+    """Rows ``first .. last - 1``: the coordinates of faces ``faces[order]``,
+    then zeros, and their cull rows."""
+    for k in range(first, last):
+        f = order[k]
+        for v in range(3):
+            i = faces[f, v]
+            for a in range(3):
+                params[k, 3 * v + a] = vertices[i, a]
+        for c in range(9, params.shape[1]):
+            params[k, c] = 0.0
+        p = params[k]
+        plane_row(cull, k, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
+
+
+@kernel()
+def _gather_faces(vertices, faces, order, params, cull):
+    """Every row of a tree of one leaf (see :func:`_gather_rows`)."""
+    _gather_rows(vertices, faces, order, params, cull, 0, order.shape[0])
+
+
+@kernel(parallel=True)
+def _fit_faces(
+    vertices, faces, order, params, cull, bounds, top, tasks, start, end, child, count, kinds, hull
+):
+    """:func:`refit_faces`: each subtree's rows gathered and its nodes fitted
+    (ranges merged, children first), one subtree per task; then the nodes
+    above them."""
+    for j in prange(tasks.shape[0]):
+        root = tasks[j]
+        _gather_rows(vertices, faces, order, params, cull, start[root], end[root])
+        _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, hull)
+    for t in range(top.shape[0] - 1, -1, -1):
+        _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
+    for j in prange(tasks.shape[0]):
+        _frame_and_ranges(bounds, tasks[j], start, end, child, count, kinds, params, cull, hull)
+    for t in range(top.shape[0] - 1, -1, -1):
+        _frame_and_ranges(bounds, top[t], start, end, child, count, kinds, params, cull, hull)
+
+
 @kernel(parallel=True)
 def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, vertices):
     """The bounds of every node (see :func:`refit`).
@@ -246,6 +404,8 @@ def refit(child, count, kinds, params, cull):
     the center of a sphere).
 
     The subtrees, and the nodes above them, are fitted on the threads.
+    Exact ranges cost O(primitives) per level of the tree; a refit
+    (:func:`refit_faces`) merges them instead.
     """
     if len(child) == 1:
         # One leaf (brute force): the traversal goes straight to its
@@ -263,3 +423,54 @@ def refit(child, count, kinds, params, cull):
     with numba.parallel_chunksize(1):
         _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, _VERTICES)
     return bounds
+
+
+def refit_faces(vertices, faces, order, child, count, kinds):
+    """``(params, cull, bounds)`` of a tree of faces whose vertices moved:
+    the rows of ``faces[order]`` of ``vertices`` (leaf order), their cull
+    rows, and the nodes' bounds over them, in one pass per subtree while
+    its rows are in cache.
+
+    Only the leaves' slab ranges are exact; a node above them takes the
+    union of its children's ranges along its axis, each child's from its
+    box narrowed by its oriented box (:func:`_ranges_merged`), which costs
+    O(nodes) rather than O(primitives) per level, and is looser where the
+    children's frames turn away from the node's.  Such a range holds
+    everything below: the oriented box's corners ``sum h_e e / |e|^2`` are
+    exact for orthogonal axes, the frames depart from orthogonality by a
+    few ``eps`` and the projections round by a few ``eps`` of the box's
+    magnitude, which the ``2^-36`` widening covers many times over.
+    """
+    # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
+    # over the memory of the frame before, once that mesh is gone, rather than
+    # the system's fresh pages, whose first writes cost as much as the refit.
+    params = _pool.empty((len(order), N_PARAMS))
+    cull = _pool.empty((len(order), CULL_COLUMNS))
+    vertices, faces, order = (
+        readonly(vertices, np.float64),
+        readonly(faces, np.int64),
+        readonly(order, np.int64),
+    )
+    if len(child) == 1:
+        _gather_faces(vertices, faces, order, params, cull)
+        return params, cull, refit(child, count, kinds, params, cull)
+    top, tasks, start, end = _refit_top(child, count)
+    bounds = _pool.empty((len(child), NODE_COLUMNS))
+    with numba.parallel_chunksize(1):
+        _fit_faces(
+            vertices,
+            faces,
+            order,
+            params,
+            cull,
+            bounds,
+            top,
+            tasks,
+            start,
+            end,
+            child,
+            count,
+            kinds,
+            _VERTICES,
+        )
+    return params, cull, bounds

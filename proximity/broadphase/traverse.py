@@ -28,7 +28,7 @@ from numba.core import types
 from .. import certified
 from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
-from .bounds import SLACK, _bound_sqr, _culled, _scale
+from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
 NONE = -1  # the feature of a row with no answer
@@ -37,9 +37,7 @@ NONE = -1  # the feature of a row with no answer
 TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bounds child count")
 #: The search's outputs; ``extra`` holds up to three of the primitive's
 #: result values and ``flag`` its boolean one (see :mod:`proximity.primitives`).
-Outputs = collections.namedtuple(
-    "Outputs", "distance sqr_distance point feature extra flag index undecided"
-)
+Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature extra flag index undecided")
 
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
@@ -53,9 +51,9 @@ _OUTPUTS = types.NamedTuple(
      types.Array(types.int64, 1, "C"), _OUT1],
     Outputs,
 )  # fmt: skip
-# (block, tree, depth, magnitude, points, order, outputs, full)
+# (block, tree, depth, magnitude, points, order, outputs, full, cutoff)
 _BLOCK_SIGNATURE = types.void(
-    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean
+    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64
 )
 _LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
 
@@ -63,7 +61,7 @@ _LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
 # the primitives' evaluation and interval (chains over the kinds, see
 # :func:`_chain`), whether the method has an exact fallback, and whether the
 # previous point's answer may seed the search.
-EVALUATE = INTERVAL = None
+EVALUATE = INTERVAL = DESCEND = None
 EXACT_FALLBACK = False
 SEED_POINT = True
 # The column of the rows' radii where the tree holds rounded primitives
@@ -75,10 +73,107 @@ LOW = HIGH = 0
 ROW = NEXT = CALL = None
 
 
-def _search_block(block, tree, depth, magnitude, points, order, out, full):
+def _descend(
+    tree, root, stack_node, stack_sqr, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset, state
+):
+    """Search ``tree`` from node ``root`` for the point ``P`` (finite), updating ``state``.
+
+    ``state`` is the best answer so far: ``(best, best_index, best_k, upper,
+    lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag)``, as
+    :func:`_search_block` keeps it; nothing beyond ``min(best, cap)`` (and the
+    previous closest point ``near``, unless NaN) is visited.  ``offset`` is
+    added to the tree's primitive indices (the instances of a scene number
+    their primitives after each other's).
+    """
+    kinds, params, index, cull, bounds, child, count = tree
+    best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state
+    s = _scale(px, py, pz, magnitude)
+    qx, qy, qz = px * s, py * s, pz * s
+    cap = min(cap, best) * s  # scaled upper bound on the answer (exact: s is a power of two)
+    if SEED_POINT and not math.isnan(near_x):
+        dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
+        cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz))
+    reach = cap + SLACK  # scaled distance beyond which primitives are skipped
+    limit = reach * reach  # its square, for the boxes
+    node = root
+    sp = 0
+    while True:
+        first, c = child[node], count[node]
+        if c > 0:
+            for k in range(first, first + c):
+                if _culled(cull, k, s, qx, qy, qz, reach):
+                    continue
+                r = EVALUATE(kinds, params, k, px, py, pz)
+                if RADIUS >= 0:
+                    # A rounded primitive: d - R, ranked signed (negative inside).
+                    r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
+                certain = True
+                if EXACT_FALLBACK:
+                    if r[0] != certified.CERTAIN:
+                        certain = False
+                        lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                        if RADIUS >= 0:
+                            lo, hi = _less(lo, hi, params[k, RADIUS])
+                        lowest = min(lowest, lo)
+                        upper = min(upper, hi)
+                if certain:
+                    d = r[1]
+                    idx = index[k] + offset
+                    if d < best or (d == best and idx < best_index):
+                        best = d
+                        best_index = idx
+                        best_k = k
+                        w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                        w_feature = r[6]
+                        w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                        w_flag = r[10]
+                if RADIUS >= 0:
+                    # The best may be negative (inside a rounded primitive).
+                    reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
+                else:
+                    reach = min(min(best, upper) * s, cap) + SLACK
+                limit = reach * reach
+            node = -1
+        else:
+            left = child[node]
+            right = left + 1
+            # The oriented box only where the box alone does not prune.
+            dl = _box_sqr(bounds, left, s, qx, qy, qz)
+            if dl <= limit:
+                dl = max(dl, _slabs_sqr(bounds, left, s, qx, qy, qz))
+            dr = _box_sqr(bounds, right, s, qx, qy, qz)
+            if dr <= limit:
+                dr = max(dr, _slabs_sqr(bounds, right, s, qx, qy, qz))
+            if dr < dl:
+                left, right, dl, dr = right, left, dr, dl
+            if dl <= limit:
+                if dr <= limit:
+                    stack_node[sp] = right
+                    stack_sqr[sp] = dr
+                    sp += 1
+                node = left
+            else:
+                node = -1
+        if node < 0:
+            while sp > 0:
+                sp -= 1
+                if stack_sqr[sp] <= limit:
+                    node = stack_node[sp]
+                    break
+            if node < 0:
+                break
+    return best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag
+
+
+def _search_block(block, tree, depth, magnitude, points, order, out, full, cutoff):
     """Nearest primitive to each point of ``block`` (points ``block * BLOCK``
     on, in the sequence ``order``); with ``full=False`` only the distances
     and ``undecided`` are written.
+
+    ``cutoff`` (``inf`` for none) bounds the search from the start: a point
+    with nothing within it gets an infinite distance, and no primitive
+    farther is visited.  The answers within it are those without a cutoff:
+    the pruning never skips a primitive at most ``cutoff`` away.
 
     ``tree`` is a :data:`TreeArrays` record (the primitives in leaf order,
     their cull rows, the nodes as :class:`~.tree.Tree` describes them),
@@ -118,81 +213,33 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
         w_feature = NONE
         w_flag = False
         if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
-            s = _scale(px, py, pz, magnitude)
-            qx, qy, qz = px * s, py * s, pz * s
-            cap = math.inf  # scaled upper bound on the answer
-            if SEED_POINT and not math.isnan(near_x):
-                dx, dy, dz = qx - near_x * s, qy - near_y * s, qz - near_z * s
-                cap = math.sqrt(dx * dx + dy * dy + dz * dz)
-            reach = cap + SLACK  # scaled distance beyond which primitives are skipped
-            limit = reach * reach  # its square, for the boxes
-            node = 0
-            sp = 0
-            while True:
-                first, c = child[node], count[node]
-                if c > 0:
-                    for k in range(first, first + c):
-                        if _culled(cull, k, s, qx, qy, qz, reach):
-                            continue
-                        r = EVALUATE(kinds, params, k, px, py, pz)
-                        if RADIUS >= 0:
-                            # A rounded primitive: d - R, ranked signed (negative inside).
-                            r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
-                        certain = True
-                        if EXACT_FALLBACK:
-                            if r[0] != certified.CERTAIN:
-                                certain = False
-                                lo, hi = INTERVAL(kinds, params, k, px, py, pz)
-                                if RADIUS >= 0:
-                                    lo, hi = _less(lo, hi, params[k, RADIUS])
-                                lowest = min(lowest, lo)
-                                upper = min(upper, hi)
-                        if certain:
-                            d = r[1]
-                            idx = index[k]
-                            if d < best or (d == best and idx < best_index):
-                                best = d
-                                best_index = idx
-                                best_k = k
-                                w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
-                                w_feature = r[6]
-                                w_a0, w_a1, w_a2 = r[7], r[8], r[9]
-                                w_flag = r[10]
-                        if RADIUS >= 0:
-                            # The best may be negative (inside a rounded primitive).
-                            reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
-                        else:
-                            reach = min(min(best, upper) * s, cap) + SLACK
-                        limit = reach * reach
-                    node = -1
-                else:
-                    left = child[node]
-                    right = left + 1
-                    dl = _bound_sqr(bounds, left, s, qx, qy, qz)
-                    dr = _bound_sqr(bounds, right, s, qx, qy, qz)
-                    if dr < dl:
-                        left, right, dl, dr = right, left, dr, dl
-                    if dl <= limit:
-                        if dr <= limit:
-                            stack_node[sp] = right
-                            stack_sqr[sp] = dr
-                            sp += 1
-                        node = left
-                    else:
-                        node = -1
-                if node < 0:
-                    while sp > 0:
-                        sp -= 1
-                        if stack_sqr[sp] <= limit:
-                            node = stack_node[sp]
-                            break
-                    if node < 0:
-                        break
+            state = (
+                best, best_index, best_k, upper, lowest,
+                w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag,
+            )  # fmt: skip
+            near = (near_x, near_y, near_z)
+            state = DESCEND(tree, 0, stack_node, stack_sqr, magnitude, px, py, pz, cutoff, *near, 0, state)
+            best, best_index, best_k, upper, lowest = state[:5]
+            w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
         if best_k >= 0:
             near_x, near_y, near_z = w_x, w_y, w_z
         # An undecided answer could be the least (or tie with it): resolve
         # every candidate up to the bound exactly, outside the kernel.
-        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= best else math.nan
+        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
+        finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+        if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
+            # Nothing within the cutoff (or an answer beyond it).
+            best_k = -1
+            dist[i] = math.inf
+            if full:
+                sqr[i] = math.inf
+                for c in range(3):
+                    point[i, c] = math.nan
+                    extra[i, c] = math.nan
+                feature[i] = NONE
+                flag[i] = False
+                prim[i] = -1
+            continue
         if best_k < 0:
             dist[i] = math.nan
             if full:
@@ -218,7 +265,6 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full):
             prim[i] = best_index
 
 
-
 @inline
 def _rounded(r, radius, px, py, pz, certify):
     """A primitive's answer ``r`` for the primitive rounded by ``radius``:
@@ -240,10 +286,10 @@ def _less(lo, hi, radius):
     return lo - radius - w, hi - radius + w
 
 
-def _loop(handle, tree, depth, magnitude, points, order, out, full):
+def _loop(handle, tree, depth, magnitude, points, order, out, full, cutoff):
     """:func:`_search_block` for every block of points, on the threads."""
     for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
-        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full)
+        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full, cutoff)
 
 
 def _link(kinds, q, k, px, py, pz):
@@ -281,25 +327,36 @@ def _chain(present, make, tag):
 
 
 @functools.cache
+def descent(method, present, radius=-1):
+    """:func:`_descend` compiled for ``method``, the kinds ``present`` and the radius column."""
+    tag = method.name
+    names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
+    return specialize(
+        _descend,
+        f"{tag}__{names}",
+        role="inline",
+        EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method), tag),
+        INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p), "interval"),
+        EXACT_FALLBACK=method.exact_fallback,
+        SEED_POINT=not method.loose,
+        RADIUS=radius,
+    )
+
+
+@functools.cache
 def search_kernel(method, present, radius=-1):
     """The compiled search of ``method`` over trees holding the kinds
     ``present`` (:class:`~proximity.primitives.Primitive` records), with
     their radii in column ``radius`` of the rows (-1: none), as a function
     of the loop's arguments but the handle."""
     tag = method.name
-    evaluate = _chain(present, lambda p: p.kernels.row_query(p, method), tag)
-    interval = _chain(present, lambda p: p.kernels.row_interval(p), "interval")
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     block = specialize(
         _search_block,
         f"{tag}__{names}",
         _BLOCK_SIGNATURE,
         role="pointer",
-        EVALUATE=evaluate,
-        INTERVAL=interval,
-        EXACT_FALLBACK=method.exact_fallback,
-        SEED_POINT=not method.loose,
-        RADIUS=radius,
+        DESCEND=descent(method, present, radius),
     )
     return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
 
@@ -335,4 +392,3 @@ def _gather(cull, bounds, child, count, depth, magnitude, p, bound, out):
             stack[sp + 1] = child[node] + 1
             sp += 2
     return found
-

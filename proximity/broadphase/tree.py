@@ -67,6 +67,25 @@ class Tree:
         """Whether the loose boxes differ from the tight ones."""
         return self.loose_cull is not self.cull
 
+    @functools.cached_property
+    def _spheres(self):
+        out = {}
+        for loose in (False, True):
+            bounds = self.boxes(loose)[0]
+            centre = (bounds[0, :3] + bounds[0, 3:6]) / 2.0
+            leaves = bounds[self.count > 0, :6]
+            with np.errstate(invalid="ignore", over="ignore"):
+                far = np.maximum(np.abs(leaves[:, :3] - centre), np.abs(leaves[:, 3:6] - centre))
+                radius = float(np.sqrt(np.max(np.sum(far * far, axis=1), initial=0.0)))
+            out[loose] = (centre, radius if np.isfinite(radius) and np.isfinite(centre).all() else np.inf)
+        return out
+
+    def sphere(self, loose):
+        """``(centre, radius)`` of a sphere around everything stored: about the
+        root box's centre, through the farthest corner of the leaves' boxes
+        (tight or loose); an infinite radius where a box is unbounded."""
+        return self._spheres[loose]
+
     def boxes(self, loose):
         """``(node boxes, primitive culling data, magnitude)``, tight or loose."""
         bounds, cull = (self.loose_bounds, self.loose_cull) if loose else (self.bounds, self.cull)
@@ -74,4 +93,3 @@ class Tree:
         # nothing; the scale is set by the finite ones.
         corners = np.abs(bounds[0, :6])
         return bounds, cull, float(np.max(corners, where=np.isfinite(corners), initial=0.0))
-

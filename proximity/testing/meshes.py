@@ -194,3 +194,77 @@ def peer_mesh(kind, size):
     return np.ascontiguousarray(sphere.vertices, dtype=np.float64), np.ascontiguousarray(
         sphere.faces, np.int64
     )
+
+
+def box(lower, upper):
+    """A closed box of 12 faces between corners ``lower`` and ``upper``, faces oriented outwards."""
+    lo, hi = np.asarray(lower, dtype=np.float64), np.asarray(upper, dtype=np.float64)
+    vertices = np.array([[(lo, hi)[x][0], (lo, hi)[y][1], (lo, hi)[z][2]] for x in (0, 1) for y in (0, 1)
+                         for z in (0, 1)])  # fmt: skip
+    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])  # fmt: skip
+    return vertices, faces
+
+
+def _join(*meshes):
+    vertices, faces, offset = [], [], 0
+    for v, f in meshes:
+        vertices.append(v)
+        faces.append(np.asarray(f) + offset)
+        offset += len(v)
+    return np.concatenate(vertices), np.concatenate(faces)
+
+
+def defective():
+    """Meshes whose signs go wrong in common ways, ``{name: (vertices, faces)}``.
+
+    ``overlapping boxes``
+        Two closed boxes that overlap (as in assemblies and game assets).
+    ``nested shells``
+        A sphere inside another, both facing outwards.
+    ``pushed octahedron``
+        An octahedron with its top vertex pushed through the bottom: it
+        intersects itself, and the region below is wound -1.
+    ``internal sheet``
+        A box with a double-sided square sheet inside, the sheet's two
+        sides on vertices of their own (closed and manifold by index).
+    ``inverted``
+        A sphere with every face reversed.
+    ``split seams``
+        A box whose faces each have vertices of their own, as textured
+        files load.
+    ``zero-area face``
+        A box whose edge from ``(-1, -1, -1)`` to ``(-1, -1, 1)`` is split at
+        a point of it by a collinear face of zero area, listed first.
+    ``cavity``
+        A sphere with a smaller one inside facing inwards: a valid solid
+        (a hollow ball).
+    ``open``
+        A sphere with four faces missing.
+    """
+    sphere_v, sphere_f = icosphere(2)
+    out = {}
+    out["overlapping boxes"] = _join(box([-1, -1, -1], [1, 1, 1]), box([0.25, 0.5, -0.6], [2.0, 1.75, 0.45]))
+    out["nested shells"] = _join((sphere_v, sphere_f), (0.5 * sphere_v, sphere_f))
+    octa_v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    octa_f = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                       [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])  # fmt: skip
+    pushed = octa_v.copy()
+    pushed[4] = [0.6, 0.1, -0.8]
+    out["pushed octahedron"] = (pushed, octa_f)
+    sheet_v = np.array([[-0.5, -0.5, 0.1], [0.5, -0.5, 0.1], [0.5, 0.5, 0.1], [-0.5, 0.5, 0.1]])
+    out["internal sheet"] = _join(box([-1, -1, -1], [1, 1, 1]), (sheet_v, [[0, 1, 2], [0, 2, 3]]),
+                                  (sheet_v, [[0, 2, 1], [0, 3, 2]]))  # fmt: skip
+    out["inverted"] = (sphere_v, sphere_f[:, ::-1].copy())
+    bv, bf = box([-1, -1, -1], [1, 1, 1])
+    out["split seams"] = (bv[bf].reshape(-1, 3), np.arange(3 * len(bf)).reshape(-1, 3))
+    # Edge (0, 1) of the box, from (-1, -1, -1) to (-1, -1, 1), is in faces 0 (0, 1, 3)
+    # and 5 (0, 5, 1); vertex 8 splits it, face 5 becomes (0, 5, 8) and (8, 5, 1), and the
+    # zero-area face (0, 8, 1) closes the surface.
+    zv = np.vstack([bv, [[-1.0, -1.0, -0.2378146699592699]]])
+    zf = [list(face) for face in bf]
+    zf[5:6] = [[0, 5, 8], [8, 5, 1]]
+    out["zero-area face"] = (zv, np.array([[0, 8, 1]] + zf))
+    out["cavity"] = _join((sphere_v, sphere_f), (0.5 * sphere_v, sphere_f[:, ::-1]))
+    out["open"] = (sphere_v, sphere_f[4:])
+    return out

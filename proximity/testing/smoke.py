@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 import proximity
+from proximity.results import asdict
 
 from . import examples
 from .meshes import icosphere
@@ -26,7 +27,7 @@ def _put(out, key, value):
     if isinstance(value, np.ndarray) or np.isscalar(value):
         out[key] = np.asarray(value)
         return
-    for name, field in vars(value).items():
+    for name, field in asdict(value).items():
         out[f"{key}.{name}"] = np.asarray(field)
 
 
@@ -76,6 +77,7 @@ def compare(out, reference):
 
 
 def main(argv=None):
+    """Run the smoke test; returns its exit status (1 where arrays differ)."""
     parser = argparse.ArgumentParser(
         prog="python -m proximity.testing.smoke", description=__doc__.split("\n")[0]
     )

@@ -15,7 +15,9 @@ try:
     import mpmath
     from mpmath import libmp
 except ImportError as error:  # pragma: no cover - the test extra installs it
-    raise ImportError("proximity.testing.exact needs mpmath: pip install 'proximity3d[test]'") from error
+    raise ImportError(
+        "proximity.testing.exact needs mpmath: pip install '.[test]' in proximity's clone"
+    ) from error
 
 
 PREC = 256

@@ -1,0 +1,217 @@
+"""Moving objects: posed views, instances, refitted meshes."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+import proximity
+from proximity.posed import to_local
+from proximity.results import asdict
+from proximity.testing import exact, examples
+from proximity.testing.meshes import icosphere, near_points, soup, torus
+
+EPS = 2.0**-52
+
+
+def _pose(seed, spread=5.0):
+    rng = np.random.default_rng(seed)
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = rotation, rng.normal(size=3) * spread
+    return T
+
+
+def _moved(T, points):
+    return points @ T[:3, :3].T + T[:3, 3]
+
+
+SHAPES = {
+    "triangle": lambda: examples.example("triangle", (6,)),
+    "segment": lambda: examples.example("segment", (6,)),
+    "disk": lambda: examples.example("disk", (6,)),
+    "circle": lambda: examples.example("circle", (6,)),
+    "point": lambda: examples.example("point", (6,)),
+    "mesh": lambda: proximity.TriangleMesh(*torus(16, 8)),
+    "scene": lambda: proximity.Scene(
+        [proximity.TriangleMesh(*icosphere(1)), proximity.Disk([3, 0, 0], [0, 0, 1], 1.0)]
+    ),
+    "capsule": lambda: proximity.Capsule([[0, 0, 0], [0, 0, 2]], 0.5),
+}
+
+
+@pytest.mark.parametrize("name", list(SHAPES))
+def test_posed_shapes_answer_as_the_shape_at_the_moved_points(name):
+    shape = SHAPES[name]()
+    T = _pose(1)
+    posed = shape.transformed(T)
+    world = np.random.default_rng(2).normal(size=(300,) + (1,) * len(shape.batch_shape) + (3,)) * 3 + T[:3, 3]
+    local = to_local(world, T[:3, :3], T[:3, 3])  # as the view moves them
+    for method in shape.methods:
+        r, core = posed.closest_point(world, method=method), shape.closest_point(local, method=method)
+        np.testing.assert_array_equal(r.distance, core.distance)
+        np.testing.assert_array_equal(r.feature, core.feature)
+        np.testing.assert_allclose(r.point, _moved(T, np.asarray(core.point)), rtol=0, atol=1e-13)
+        np.testing.assert_allclose(r.normal, np.asarray(core.normal) @ T[:3, :3].T, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(posed.distance(world, method=method), r.distance)
+
+
+def test_a_posed_mesh_is_within_the_robust_bound_of_the_mesh_built_moved():
+    vertices, faces = torus(24, 12)
+    T = _pose(3, spread=100.0)
+    posed = proximity.TriangleMesh(vertices, faces).transformed(T)
+    moved = proximity.TriangleMesh(_moved(T, vertices), faces)
+    points = _moved(T, near_points(np.random.default_rng(4), vertices, faces, 400, 1e-2))
+    a, b = posed.distance(points), moved.distance(points)
+    for k in range(0, 400, 40):
+        face = moved.closest_point(points[k]).face
+        tri = moved.vertices[moved.faces[face]]
+        scale = float(exact.triangle_scale(tri, points[k])) + float(np.linalg.norm(points[k] - T[:3, 3]))
+        assert abs(a[k] - b[k]) <= 16 * EPS * scale, k
+
+
+def test_posing_composes_and_costs_nothing_per_face():
+    mesh = proximity.TriangleMesh(*icosphere(3))
+    A, B = _pose(5), _pose(6)
+    twice = mesh.transformed(A).transformed(B)
+    assert twice.shape is mesh and twice.shape._tree is mesh._tree
+    np.testing.assert_allclose(twice.transform, B @ A, rtol=0, atol=1e-14)
+    points = np.random.default_rng(7).normal(size=(50, 3)) * 4
+    np.testing.assert_allclose(
+        twice.distance(points), mesh.transformed(B @ A).distance(points), rtol=0, atol=1e-13
+    )
+
+
+@pytest.mark.parametrize(
+    "T, match",
+    [
+        (np.eye(3), "4x4"),
+        (np.full((4, 4), np.nan), "finite"),
+        (np.diag([2.0, 1, 1, 1]), "rigid"),
+        (np.diag([-1.0, 1, 1, 1]), "reflection"),
+        (np.vstack([np.eye(4)[:3], [0, 0, 1, 1]]), "last row"),
+    ],
+)
+def test_bad_transforms_name_the_argument(T, match):
+    with pytest.raises(ValueError, match=f"transform must .*{match}"):
+        proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).transformed(T)
+
+
+def test_instances_share_their_mesh_and_answer_as_the_meshes_built_moved():
+    vertices, faces = icosphere(3)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    poses = [_pose(10 + k, spread=4.0) for k in range(12)]
+    extra = proximity.Disk([0, 0, 9], [0, 0, 1], 1.0)
+    scene = proximity.Scene([*(mesh.transformed(T) for T in poses), extra])
+    flat = proximity.Scene([*(proximity.TriangleMesh(_moved(T, vertices), faces) for T in poses), extra])
+    assert all(s.shape._tree is mesh._tree for s in scene.shapes[:-1])
+    points = np.random.default_rng(8).normal(size=(2000, 3)) * 6
+    for method in scene.methods:
+        a, b = scene.closest_point(points, method=method), flat.closest_point(points, method=method)
+        np.testing.assert_allclose(a.distance, b.distance, rtol=0, atol=64 * EPS * 30)
+        same = a.primitive == b.primitive
+        assert same.mean() > 0.9
+        np.testing.assert_array_equal(a.source, np.searchsorted(scene.offsets, a.primitive, side="right") - 1)
+        np.testing.assert_allclose(a.point[same], b.point[same], rtol=0, atol=1e-12)
+    # A new frame: only the poses change.
+    moved = [_pose(30 + k, spread=4.0) for k in range(12)]
+    again = scene.with_poses(np.array(moved))
+    fresh = proximity.Scene([*(mesh.transformed(T) for T in moved), extra])
+    np.testing.assert_array_equal(again.distance(points), fresh.distance(points))
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(again)).distance(points), fresh.distance(points))
+    with pytest.raises(ValueError, match=r"transforms must have shape \(12, 4, 4\)"):
+        scene.with_poses(np.array(moved[:3]))
+
+
+@pytest.mark.parametrize("skew", [0.0, 1e-10])
+def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
+    # Each instance answers as its posed view alone (the same moved point),
+    # so the scene's answer is the least of theirs, bit for bit, ties to the
+    # lowest primitive; with rotations orthonormal only to ``skew`` too.
+    vertices, faces = icosphere(2)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    poses = []
+    for k in range(20):
+        T = _pose(50 + k, spread=3.0)
+        T[:3, :3] += skew * np.random.default_rng(k).normal(size=(3, 3))
+        poses.append(T)
+    scene = proximity.Scene([mesh.transformed(T) for T in poses])
+    points = np.random.default_rng(5).normal(size=(3000, 3)) * 5
+    got = scene.closest_point(points)
+    each = np.array([mesh.transformed(T).distance(points) for T in poses])
+    least = each.min(axis=0)
+    np.testing.assert_array_equal(got.distance, least)
+    first = np.argmax(each == least, axis=0)
+    np.testing.assert_array_equal(got.source, first)
+
+
+_TETRAHEDRON = (
+    np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
+    [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+)
+
+
+@pytest.mark.parametrize("shape", [torus(40, 20), _TETRAHEDRON], ids=["tree", "one leaf"])
+def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit(shape):
+    vertices, faces = shape
+    mesh = proximity.TriangleMesh(vertices, faces)
+    rng = np.random.default_rng(9)
+    moved = vertices * [1.3, 0.8, 1.1] + rng.normal(size=vertices.shape) * 0.01
+    refit = mesh.with_vertices(moved)
+    fresh = proximity.TriangleMesh(moved, faces)
+    points = np.concatenate([near_points(rng, moved, faces, 1500, 1e-3), rng.normal(size=(1500, 3))])
+    for method in mesh.methods:
+        a, b = refit.closest_point(points, method=method), fresh.closest_point(points, method=method)
+        for name, value in asdict(b).items():
+            np.testing.assert_array_equal(getattr(a, name), value, err_msg=name)
+    np.testing.assert_array_equal(refit.signed_distance(points), fresh.signed_distance(points))
+    with pytest.raises(ValueError, match="vertices must have shape"):
+        mesh.with_vertices(moved[:-1])
+    with pytest.raises(ValueError, match="vertices must be finite"):
+        mesh.with_vertices(np.where(np.arange(len(moved))[:, None] == 3, np.nan, moved))
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-30, 1e30])
+@pytest.mark.parametrize("kind", ["sphere", "soup"])
+def test_refitted_bounds_hold_every_face_below(kind, scale):
+    # The refit merges its children's ranges rather than measuring them:
+    # every node's box and slabs must still hold the vertices of its faces,
+    # after a twist that turns the faces far from their frames; with faces
+    # of zero area (no normal) among them too.
+    if kind == "sphere":
+        vertices, faces = icosphere(3)
+    else:
+        vertices, faces = soup(np.random.default_rng(3), 600, degenerate=0.3)
+        vertices = vertices - 0.5
+    vertices = vertices * scale
+    mesh = proximity.TriangleMesh(vertices, faces)
+    x, y, z = vertices.T
+    angle = 1.5 * z / scale
+    twisted = np.stack([np.cos(angle) * x - np.sin(angle) * y, np.sin(angle) * x + np.cos(angle) * y, z], 1)
+    tree = mesh.with_vertices(twisted)._tree
+    corners = tree.params[:, :9].reshape(-1, 3, 3)
+    child, count, bounds = tree.child, tree.count, tree.bounds
+
+    def rows(i):
+        if count[i] > 0:
+            return np.arange(child[i], child[i] + count[i])
+        return np.concatenate([rows(child[i]), rows(child[i] + 1)])
+
+    for i in range(len(child)):
+        points = corners[rows(i)].reshape(-1, 3)
+        assert (points >= bounds[i, :3]).all() and (points <= bounds[i, 3:6]).all()
+        # Within the few eps of the coordinates' magnitude that the pruning
+        # allows for (a leaf's ranges are measured, and round as NumPy's do).
+        slack = 16 * EPS * np.abs(points).max()
+        for c in (6, 11, 16):
+            h = points @ bounds[i, c : c + 3]
+            assert (h >= bounds[i, c + 3] - slack).all() and (h <= bounds[i, c + 4] + slack).all(), (i, c)
