@@ -19,7 +19,7 @@ torus) is exact: where the path from the nearest circle point crosses the
 axis, it is the cusp where the surface meets the axis.  For meshes and
 scenes, the point reached from the nearest core point may lie inside the
 solid, where another part of the core is within ``r`` of it.  Outside the
-solid (``d >= r``) every answer is exact.
+solid (``d >= r``) the answers are the solid's own, to the bounds below.
 
 Accuracy.  ``robust``: the core's distance is within ``8 eps S_core`` of
 the exact one and ``d - r`` rounds once more, by at most ``eps/2 (S_core
