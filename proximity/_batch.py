@@ -12,6 +12,7 @@ block functions, one per method, and the exact answer of one query.
 """
 
 import collections
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,22 +81,22 @@ class Layout:
     arrays: tuple
     extra: tuple
 
-    @property
+    @functools.cached_property
     def outputs(self):
         """Every output: ``(name, dtype, width)``, :data:`COMMON` first."""
         return COMMON + self.extra
 
-    @property
+    @functools.cached_property
     def shape_record(self):
         """The namedtuple class of the shape's record."""
         return _record(f"{self.name.title()}Arrays", self.flags + tuple(a for a, _ in self.arrays))
 
-    @property
+    @functools.cached_property
     def out_record(self):
         """The namedtuple class of the outputs."""
         return _record(f"{self.name.title()}Outputs", tuple(name for name, _, _ in self.outputs))
 
-    @property
+    @functools.cached_property
     def block_signature(self):
         """The block functions' signature: ``(shape, P, n_j, k0, nb, out, exact, full)``."""
         # As Numba types the records passed in: uniform ones are NamedUniTuples.
@@ -108,7 +109,7 @@ class Layout:
         i64 = types.int64
         return types.void(shape, A_IN3, i64, i64, i64, out, OUT_FLAG, types.boolean)
 
-    @property
+    @functools.cached_property
     def loop_signature(self):
         """The loop's signature: a handle, then the block's arguments but ``k0, nb``."""
         args = self.block_signature.args
@@ -127,9 +128,6 @@ def _record(name, fields):
         cls = collections.namedtuple(name, fields, module=__name__)
         globals()[name] = _records[key] = cls
     return _records[key]
-
-
-_batches = {}
 
 
 def batch_kernel(layout, block):
