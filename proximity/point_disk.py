@@ -322,11 +322,18 @@ def _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def _keep(sinks, oks, q, res, ok, full):
+def _keep(sinks, oks, q, res, ok, full, lean):
     """Query ``q``'s results into ``sinks`` (the distance alone unless
-    ``full``) and whether they hold into ``oks``; 1 where they do not."""
+    ``full``) and, after a complete pass (not ``lean``), whether they hold
+    into ``oks``; 1 where they do not.
+
+    A lean pass that leaves a query is followed by a complete pass over the
+    whole block, which writes every flag again, so the lean pass keeps only
+    the count.
+    """
     put_round(sinks, q, res, full)
-    oks[q] = ok
+    if not lean:
+        oks[q] = ok
     return not ok
 
 
@@ -340,7 +347,7 @@ def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full, lean):
         cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
-        left += _keep(sinks, oks, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
     return left
 
 
@@ -413,7 +420,7 @@ def _one_loop(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius
     for q in range(BLOCK):
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        left += _keep(sinks, oks, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
     return left
 
 
