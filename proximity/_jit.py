@@ -225,7 +225,7 @@ def _entry(kernel_, signature):
     return kernel_.overloads[tuple(signature.args)].entry_point
 
 
-def launcher(loop, tag, signature, block, block_signature):
+def launcher(loop, tag, signature, block, block_signature, **bindings):
     """``loop`` compiled to call ``block``: a function of the loop's arguments but the first.
 
     ``loop`` is a parallel kernel whose first argument is a handle, passed
@@ -237,8 +237,10 @@ def launcher(loop, tag, signature, block, block_signature):
 
     Through the block's address where Numba's internals allow it (the loop
     compiles once for every block of a signature), else by a direct call.
-    The function returned skips Numba's dispatch: it must be called with
-    arguments of exactly the types of ``signature``.
+    ``bindings`` are bound in ``loop`` too (see :func:`specialize`); they
+    must be the same at every call with one ``tag``.  The function returned
+    skips Numba's dispatch: it must be called with arguments of exactly the
+    types of ``signature``.
     """
     global BY_ADDRESS, ADDRESS_ERROR
     key = (loop, tag, block)
@@ -248,14 +250,15 @@ def launcher(loop, tag, signature, block, block_signature):
     if BY_ADDRESS:
         try:
             call = _call_through(_at(block_signature))
-            compiled = specialize(loop, f"{tag}__address", signature, parallel=True, CALL=call)
+            compiled = specialize(loop, f"{tag}__address", signature, parallel=True, CALL=call, **bindings)
             run = functools.partial(_entry(compiled, signature), _address(block, block_signature))
         except Exception as exc:  # noqa: BLE001  (any failure of the private internals)
             BY_ADDRESS = False
             ADDRESS_ERROR = exc
     if run is None:
         name = hashlib.blake2b(block.py_func.__qualname__.encode(), digest_size=6).hexdigest()
-        compiled = specialize(loop, f"{tag}__{name}", signature, parallel=True, CALL=_call_direct(block))
+        call = _call_direct(block)
+        compiled = specialize(loop, f"{tag}__{name}", signature, parallel=True, CALL=call, **bindings)
         run = functools.partial(_entry(compiled, signature), 0)
     _launchers[key] = run
     return run
