@@ -61,9 +61,11 @@ def part(func):
     return njit(**_PART)(func)
 
 
-def kernel(*signature, parallel=False):
+def kernel(*signature, parallel=False, nogil=False):
     """A kernel, cached on disk where possible; compiled at its first call,
-    or at once when a ``signature`` is given.
+    or at once when a ``signature`` is given.  ``nogil``: its calls release
+    the GIL, so that Python threads run it side by side
+    (:func:`proximity._threads.spread`).
 
     Its cached file is named with :func:`_sources_stamp`, as a specialised
     kernel's is: a kernel inlines helpers of other modules, and Numba
@@ -71,7 +73,8 @@ def kernel(*signature, parallel=False):
     """
 
     def decorate(func):
-        return compiled(_stamped(func, func.__globals__), signature, parallel=parallel, **_OPTIONS)
+        options = dict(_OPTIONS, nogil=True) if nogil else _OPTIONS
+        return compiled(_stamped(func, func.__globals__), signature, parallel=parallel, **options)
 
     return decorate
 
