@@ -15,7 +15,6 @@ import collections
 from dataclasses import dataclass
 
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from . import _counts, _pool
@@ -26,8 +25,8 @@ from ._loops import A_IN3, BLOCK, OUT_FLAG, loop_views, single_shape
 CALL = None
 
 
-def _loop(handle, shape, P, n_j, out, exact, full):
-    """Every block of queries of an ``(I, J)`` loop, on the threads.
+def _loop(handle, lo, hi, shape, P, n_j, out, exact, full):
+    """The blocks of queries ``lo .. hi - 1`` of an ``(I, J)`` loop.
 
     ``shape`` is the primitive's record of broadcast arrays ``(I, J, ...)``,
     ``P`` the points ``(I, J, 3)``, ``out`` the record of flat outputs;
@@ -35,10 +34,20 @@ def _loop(handle, shape, P, n_j, out, exact, full):
     the distances are written.
     """
     n = out[0].shape[0]
-    for block in prange((n + BLOCK - 1) // BLOCK):
+    for block in range(lo, hi):
         k0 = block * BLOCK
         nb = min(BLOCK, n - k0)
         CALL(handle, shape, P, n_j, k0, nb, out, exact, full)
+
+
+def _blocks(shape, P, n_j, out, exact, full):
+    """The number of blocks of :func:`_loop`."""
+    return (out[0].shape[0] + BLOCK - 1) // BLOCK
+
+
+#: Fewest blocks of queries a thread takes at a time: a thread started for
+#: fewer would cost more than the queries it answers.
+BATCH_GRAIN = 16
 
 
 _FLOAT1 = types.Array(types.float64, 1, "C")
@@ -110,9 +119,9 @@ class Layout:
 
     @property
     def loop_signature(self):
-        """The loop's signature: a handle, then the block's arguments but ``k0, nb``."""
+        """The loop's signature: a handle, a range of blocks, then the block's arguments but ``k0, nb``."""
         args = self.block_signature.args
-        return types.void(types.int64, *args[:3], *args[5:])
+        return types.void(types.int64, types.int64, types.int64, *args[:3], *args[5:])
 
 
 _records = {}
@@ -136,7 +145,15 @@ def batch_kernel(layout, block):
     """The compiled loop of ``layout`` over the block function ``block`` (a
     ``"pointer"`` kernel of :attr:`Layout.block_signature`), as a function
     of the loop's arguments but the handle."""
-    return launcher(_loop, f"blocks_{layout.name}", layout.loop_signature, block, layout.block_signature)
+    return launcher(
+        _loop,
+        f"blocks_{layout.name}",
+        layout.loop_signature,
+        block,
+        layout.block_signature,
+        _blocks,
+        BATCH_GRAIN,
+    )
 
 
 def run(layout, kernels, method, flags, arrays, points, out_shape, full):

@@ -189,6 +189,11 @@ def _workers():
     return _pool
 
 
+def current():
+    """The number of threads batch queries of this Python thread run on (see :func:`threads`)."""
+    return _lazy.load("numba").get_num_threads()
+
+
 def spread(run, tasks, chunk=1):
     """``run(lo, hi)`` over the tasks ``0 .. tasks - 1``, ``chunk`` at a time,
     on as many threads as batch queries use (see :func:`threads`).
@@ -200,7 +205,7 @@ def spread(run, tasks, chunk=1):
     thread alone where there is a single range or a single thread.
     """
     ranges = [(lo, min(lo + chunk, tasks)) for lo in range(0, tasks, chunk)]
-    n = min(len(ranges), _lazy.load("numba").get_num_threads())
+    n = min(len(ranges), current())
     if n <= 1:
         for lo, hi in ranges:
             run(lo, hi)
