@@ -427,15 +427,15 @@ _FACE_CHUNK = 8192
 
 
 @kernel(nogil=True)
-def _face_step(step, lo, hi, vertices, faces, order, kind, cull, hashes, params):
+def _face_step(step, lo, hi, vertices, bits, faces, order, kind, cull, hashes, params):
     """One pass over the faces ``lo .. hi - 1`` (of ``faces`` of ``vertices``,
-    hulls of three points of kind ``kind``); one kernel for both passes.
+    whose bits are ``bits``, hulls of three points of kind ``kind``); one
+    kernel for both passes.
 
     ``_FACE_ROWS``: their :func:`primitive_cull` rows and :func:`_row_hashes`.
     ``_FACE_PARAMS``: the parameters of the faces ``faces[order[lo:hi]]``.
     """
     if step == _FACE_ROWS:
-        bits = vertices.view(np.uint64)
         for k in range(lo, hi):
             _face_row(vertices, bits, faces, k, kind, cull, hashes)
     else:
@@ -452,8 +452,9 @@ _NO_PARAMS = np.empty((0, primitives.N_PARAMS))
 
 def _faces(step, vertices, faces, order, kind, cull, hashes, params, n):
     """:func:`_face_step` over ``n`` faces, on the threads."""
+    bits = vertices.view(np.uint64)  # here: a view in a kernel compiles a function of its own
     _threads.spread(
-        lambda lo, hi: _face_step(step, lo, hi, vertices, faces, order, kind, cull, hashes, params),
+        lambda lo, hi: _face_step(step, lo, hi, vertices, bits, faces, order, kind, cull, hashes, params),
         n,
         _FACE_CHUNK,
     )
