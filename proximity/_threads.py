@@ -1,7 +1,11 @@
-"""Numba's threading layer: chosen so that forks and Python threads are safe.
+"""Threads: Numba's threading layer, chosen so that forks and Python threads are safe, and Python threads.
 
-Numba runs the batch kernels on one of three threading layers, picked when
-the first parallel kernel is compiled or loaded, once per process:
+The loops over blocks of queries, the hierarchy's build and its fit are
+serial kernels that release the GIL, run side by side on Python threads
+(:func:`spread`): a kernel of parallel loops takes seconds longer to
+compile.  The other parallel kernels (the winding number, validity, ray
+crossings) run on one of Numba's three threading layers, picked when the
+first parallel kernel is compiled or loaded, once per process:
 
 - ``tbb`` is safe under ``fork`` and under concurrent Python threads.  The
   ``tbb`` package from the package index installs its library where the
