@@ -16,7 +16,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from . import _counts, _pool
@@ -29,21 +28,32 @@ CALL = None
 SPAN = 1
 
 
-def _loop(handle, shape, P, n_j, out, exact, full):
-    """Every block of queries of an ``(I, J)`` loop, on the threads.
+def _loop(handle, lo, hi, shape, P, n_j, out, exact, full):
+    """Calls ``lo .. hi - 1`` of the block function over an ``(I, J)`` loop,
+    ``SPAN`` blocks of queries each (the last one fewer queries).
 
     ``shape`` is the primitive's record of broadcast arrays ``(I, J, ...)``,
     ``P`` the points ``(I, J, 3)``, ``out`` the record of flat outputs;
     query ``k`` is loop index ``(k // J, k % J)``.  With ``full=False`` only
-    the distances are written.  Each call of the block function gets
-    ``SPAN`` blocks (the last one fewer queries).
+    the distances are written.
     """
     n = out[0].shape[0]
     run = SPAN * BLOCK
-    for task in prange((n + run - 1) // run):
+    for task in range(lo, hi):
         k0 = task * run
         nb = min(run, n - k0)
         CALL(handle, shape, P, n_j, k0, nb, out, exact, full)
+
+
+def _blocks(run, shape, P, n_j, out, exact, full):
+    """The number of calls of the block function in :func:`_loop`, ``run`` queries each."""
+    return (out[0].shape[0] + run - 1) // run
+
+
+#: Fewest blocks of queries a thread takes at a time: a thread started for
+#: fewer would cost more than the queries it answers (a layout of ``span``
+#: blocks per call: this many over ``span`` calls).
+BATCH_GRAIN = 16
 
 
 _FLOAT1 = types.Array(types.float64, 1, "C")
@@ -123,9 +133,9 @@ class Layout:
 
     @functools.cached_property
     def loop_signature(self):
-        """The loop's signature: a handle, then the block's arguments but ``k0, nb``."""
+        """The loop's signature: a handle, a range of blocks, then the block's arguments but ``k0, nb``."""
         args = self.block_signature.args
-        return types.void(types.int64, *args[:3], *args[5:])
+        return types.void(types.int64, types.int64, types.int64, *args[:3], *args[5:])
 
 
 _records = {}
@@ -146,8 +156,17 @@ def batch_kernel(layout, block):
     """The compiled loop of ``layout`` over the block function ``block`` (a
     ``"pointer"`` kernel of :attr:`Layout.block_signature`), as a function
     of the loop's arguments but the handle."""
-    signatures = layout.loop_signature, block, layout.block_signature
-    return launcher(_loop, f"blocks_{layout.name}", *signatures, SPAN=layout.span)
+    span = layout.span
+    return launcher(
+        _loop,
+        f"blocks_{layout.name}",
+        layout.loop_signature,
+        block,
+        layout.block_signature,
+        functools.partial(_blocks, span * BLOCK),
+        max(1, BATCH_GRAIN // span),
+        SPAN=span,
+    )
 
 
 def run(layout, kernels, method, flags, arrays, points, out_shape, full):
