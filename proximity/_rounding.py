@@ -60,7 +60,13 @@ def surface_points(p, c, d, r, rows_of):
     That point is on the surface, and within ``2 d`` of the nearest one."""
     dim = p.shape[-1]
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        point = c + (p - c) * np.where(r == 0, 0.0, r / d)[..., None]
+        # Along P - c normalised by its own length, not by d: an error of c
+        # across the surface then moves the point by as much, where r / d
+        # times as much would if the two lengths differed by it.
+        v = p - c
+        v = v / np.max(np.abs(v), axis=-1, keepdims=True)
+        v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+        point = np.where((r == 0)[..., None], c, c + v * r[..., None])
         m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
         lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
     rows = np.flatnonzero(lost.reshape(-1))
@@ -72,6 +78,44 @@ def surface_points(p, c, d, r, rows_of):
         radius = np.broadcast_to(r, d.shape).reshape(-1)[rows]
         point.reshape(-1, dim)[rows] = flat_c + (radius * side)[:, None] * u
     return point
+
+
+def spindle_points(point, normal, d, r, circle, result):
+    """``(point, normal)`` with the rows fixed where a circle of radius ``R``
+    rounded by ``r > R`` (a spindle torus) has its nearest surface point on
+    the axis.
+
+    In the circle's meridian plane the point is at ``(radial, height)`` and
+    its nearest circle point at ``(R, 0)``; the surface point ``r`` from it
+    towards the point is at radial ``R + r (radial - R) / d``.  Where that is
+    negative, the ray has crossed the axis (the circle's medial axis) into
+    the balls of the circle's other side, and the nearest point of the
+    surface is the cusp where it meets the axis: ``center + sign(height)
+    sqrt(r^2 - R^2) u`` (``u`` the unit axis), outward normal ``sign(height)
+    u``.  ``circle`` is the core (a :class:`proximity.Circle` batch) and
+    ``result`` its answer.
+    """
+    shape = d.shape
+    big_r = np.broadcast_to(circle.radius, shape)
+    radial = np.broadcast_to(np.asarray(result.radial), shape)
+    height = np.broadcast_to(np.asarray(result.height), shape)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        # r > R holds wherever the rest does, but for the rounding of R - radial.
+        crossed = (r > big_r) & (radial < big_r) & ((r / d) * (big_r - radial) > big_r)
+    if not crossed.any():
+        return point, normal
+    rows = crossed
+    axis = np.broadcast_to(circle.normal, shape + (3,))[rows]
+    axis = axis / np.max(np.abs(axis), axis=-1, keepdims=True)
+    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    side = np.where(height[rows] < 0, -1.0, 1.0)[:, None]
+    ratio = big_r[rows] / r[rows]
+    # sqrt(r^2 - R^2) without squaring r, which underflows or overflows at extreme scales.
+    z = r[rows] * np.sqrt((1.0 - ratio) * (1.0 + ratio))
+    point, normal = np.array(point, copy=True), np.array(normal, copy=True)
+    point[rows] = np.broadcast_to(circle.center, shape + (3,))[rows] + side * z[:, None] * axis
+    normal[rows] = side * axis
+    return point, normal
 
 
 def surface_directions(kinds, params):

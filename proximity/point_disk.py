@@ -25,24 +25,24 @@ from ._fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
 from ._jit import inline, kernel, part, specialize
 from ._loops import (
     BLOCK,
-    ONE_OK,
-    ONE_OUT,
-    ONE_P,
-    ONE_ROWS,
-    ROUND_OK,
-    ROUND_OUT,
+    ROUND_C,
+    ROUND_P,
+    ROUND_R,
     ROUND_ROWS,
-    gather_points,
-    gather_round,
-    point_at,
-    round_at,
-    scatter_round,
+    ROUND_U,
+    block_scalars,
+    block_vectors,
+    borrowed,
+    drain_round,
+    put_round,
+    round_sinks,
+    scratch,
     single_entry,
-    store,
 )
 from .features import Feature
 from .methods import CERTIFIED
 from .point_circle import (
+    Q_MIN,
     circle,
     decompose,
     decompose_local,
@@ -247,6 +247,12 @@ def certified_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py,
     return certified_round(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
 
 
+# Blocks per call of a block function (see :attr:`proximity._batch.Layout.span`).
+# A distance to one disk costs a few nanoseconds, and a call of the block
+# function about as much as ten of them; eight blocks a call make that a
+# percent or two.
+SPAN = 8
+
 # Bound per method by :func:`proximity._jit.specialize`: the query of one
 # point, whether the block function runs the robust method's SIMD loop
 # first, and whether the method has an exact fallback.
@@ -281,15 +287,33 @@ def exact_row(row, args, point):
 
 
 @inline
-def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
+def _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     """One query of the compiled loops' robust path, without branches:
     its nine results, and whether they hold: in the safe window, with a
-    radial part whose length has all its bits (else the scalar path measures
-    it again)."""
+    radial part whose length has all its bits (else the scalar path
+    measures it again).
+
+    ``lean`` (a constant) asks for less: a radial part of at least
+    :data:`~.point_circle.Q_MIN` whether or not on the axis, and, where
+    ``lean == 2``, a query off the axis.  A lean loop that keeps the
+    distance alone then compiles without the test of the axis (a square
+    root) and without the rim point (three divisions); one that keeps the
+    closest points of many shapes, without the rim direction on the axis,
+    which depends on each shape's normal (a square root and three more
+    divisions per query).  The queries a lean loop leaves are few but for
+    points on or next to the axis; a complete loop (``lean == 0``) answers
+    those of them that it can, with the same bits.
+    """
     dx, dy, dz = px - cx, py - cy, pz - cz
     _, ok = window(dx, dy, dz, radius)
     h, qx, qy, qz, qq, on_axis = decompose_local(dx, dy, dz, ux, uy, uz)
-    ok = ok & (not short_radial(qq, on_axis))
+    if lean:
+        ok = ok & (qq >= Q_MIN)
+    else:
+        ok = ok & (not short_radial(qq, on_axis))
+    if lean == 2:
+        ok = ok & (not on_axis)
+        on_axis = False
     res = _disk_from(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     d, s, x, y, z = rim(cx, cy, cz, ux, uy, uz, radius, h, qx, qy, qz, qq, on_axis, radius, UNSCALED)
     if not is_disk:
@@ -297,39 +321,122 @@ def _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
     return res, ok
 
 
-def _block(shape, P, n_j, k0, nb, out, exact, full):
-    """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
+@inline
+def _keep(sinks, oks, q, res, ok, full, lean):
+    """Query ``q``'s results into ``sinks`` (the distance alone unless
+    ``full``) and, after a complete pass (not ``lean``), whether they hold
+    into ``oks``; 1 where they do not.
 
-    Gathered into local scratch (the rows of ``ROUND_*``); for ``robust``,
-    computed by a loop that compiles to SIMD code (with, in row
-    ``ROUND_OK``, whether the query was in its safe window); every other
-    query is done one by one on the scalar path, which is the only path of
-    the other methods.  Then scattered to the outputs.
+    A lean pass that leaves a query is followed by a complete pass over the
+    whole block, which writes every flag again, so the lean pass keeps only
+    the count.
     """
+    put_round(sinks, q, res, full)
+    if not lean:
+        oks[q] = ok
+    return not ok
+
+
+@inline
+def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full, lean):
+    """The SIMD loop of :func:`_block` over the runs of centers ``c``, unit
+    normals ``u``, points ``p`` (``x0, y0, z0, x1, ...``) and radii ``r``;
+    returns how many queries it left to the scalar path."""
+    left = 0
+    for q in range(BLOCK):
+        cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
+        px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+        res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
+    return left
+
+
+@inline
+def _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, lean):
+    """:func:`_pairs_loop`, lean or complete (see :func:`_robust_row`),
+    compiled for each kind of output so that the distance alone compiles
+    without the closest point's terms."""
+    if full:
+        return _pairs_loop(sinks, oks, c, u, p, r, is_disk, True, 2 if lean else 0)
+    return _pairs_loop(sinks, oks, c, u, p, r, is_disk, False, 1 if lean else 0)
+
+
+def _block(shape, P, n_j, k0, nb, out, exact, full):
+    """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`),
+    a block of :data:`~proximity._loops.BLOCK` at a time (the loop gives
+    :data:`SPAN` blocks per call).
+
+    The shapes' arrays and the points are read in place where they can be
+    (see :func:`~proximity._loops.block_vectors`), and the results written
+    in place (:func:`~proximity._loops.round_sinks`).  For ``robust``, a
+    loop that compiles to SIMD code answers every query it can (``oks``
+    says which); every other query is done one by one on the scalar path,
+    which is the only path of the other methods.
+    """
+    shape, P, out, exact = borrowed(shape), borrowed(P), borrowed(out), borrowed(exact)
     is_disk, C, U, N, R = shape
-    z = np.empty((ROUND_ROWS, BLOCK))
-    gather_round(z, C, U, P, R, n_j, k0, nb)
-    if SIMD:
-        for q in range(BLOCK):
-            cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
-            res, ok = _robust_row(is_disk, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ROUND_OUT, q, res)
-            z[ROUND_OK, q] = ok
-    else:
-        for q in range(nb):
-            z[ROUND_OK, q] = 0.0
-    for q in range(nb):
-        if z[ROUND_OK, q] != 0.0:
-            continue
-        k = k0 + q
-        i = k // n_j
-        j = k - i * n_j
-        cx, cy, cz, ux, uy, uz, radius, px, py, pz = round_at(z, q)
-        cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, N[i, j, 0], N[i, j, 1], N[i, j, 2], radius, px, py, pz)
-        if EXACT_FALLBACK:
-            exact[k] = cert[0] != certified.CERTAIN
-        store(z, ROUND_OUT, q, cert[1:])
-    scatter_round(z, ROUND_OUT, k0, nb, out, full)
+    copies, results = scratch(ROUND_ROWS, np.float64), scratch(8, np.float64)
+    codes, flags = scratch(1, np.int8), scratch(1, np.bool_)
+    oks = results[7]
+    for b0 in range(k0, k0 + nb, BLOCK):
+        bn = min(BLOCK, k0 + nb - b0)
+        c = block_vectors(copies, ROUND_C, C, n_j, b0, bn)
+        u = block_vectors(copies, ROUND_U, U, n_j, b0, bn)
+        p = block_vectors(copies, ROUND_P, P, n_j, b0, bn)
+        r = block_scalars(copies, ROUND_R, R, n_j, b0, bn)
+        sinks = round_sinks(out, b0, bn, full, results, codes, flags)
+        left = bn
+        if SIMD:
+            left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, True)
+            if left:
+                left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, False)
+        else:
+            for q in range(bn):
+                oks[q] = 0.0
+        if left:
+            for q in range(bn):
+                if oks[q] != 0.0:
+                    continue
+                k = b0 + q
+                i = k // n_j
+                j = k - i * n_j
+                cx, cy, cz = c[3 * q], c[3 * q + 1], c[3 * q + 2]
+                ux, uy, uz = u[3 * q], u[3 * q + 1], u[3 * q + 2]
+                px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+                nx, ny, nz = N[i, j, 0], N[i, j, 1], N[i, j, 2]
+                cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, r[q], px, py, pz)
+                if EXACT_FALLBACK:
+                    exact[k] = cert[0] != certified.CERTAIN
+                put_round(sinks, q, cert[1:], full)
+        drain_round(sinks, out, b0, bn, full)
+
+
+@inline
+def _one_loop(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius):
+    """The SIMD loop of :func:`_robust_block_one` over the points ``p``
+    (``x0, y0, z0, x1, ...``); returns how many queries it left to the
+    scalar path."""
+    left = 0
+    for q in range(BLOCK):
+        px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+        res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
+    return left
+
+
+@inline
+def _one_pass(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius):
+    """:func:`_one_loop`, lean or complete (see :func:`_robust_row`; the
+    rim direction on the axis is a constant of the block here): one loop
+    for the distance alone (the kinds differ there by a select), and one for
+    each kind's full answer, so that each compiles to the work it keeps
+    only."""
+    lean = 1 if lean else 0
+    if not full:
+        return _one_loop(sinks, oks, p, is_disk, False, lean, cx, cy, cz, ux, uy, uz, radius)
+    if is_disk:
+        return _one_loop(sinks, oks, p, True, True, lean, cx, cy, cz, ux, uy, uz, radius)
+    return _one_loop(sinks, oks, p, False, True, lean, cx, cy, cz, ux, uy, uz, radius)
 
 
 @part
@@ -337,36 +444,32 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
     """:func:`_block` for the robust method and a batch against one shape,
     ``C[0, 0]``, ``U[0, 0]``, ``R[0, 0]``.
 
-    Only the points are gathered (the rows of ``ONE_*``).  The loop reads
-    the shape as scalars, so the compiler computes its own terms (such as
-    the rim direction used on the axis) once per block instead of once per
-    query.
+    Only the points are read.  The loop reads the shape as scalars, so the
+    compiler computes its own terms (such as the rim direction used on the
+    axis) once per call instead of once per query.
     """
+    shape, P, out = borrowed(shape), borrowed(P), borrowed(out)
     is_disk, C, U, _, R = shape
-    z = np.empty((ONE_ROWS, BLOCK))
-    gather_points(z, ONE_P, P, n_j, k0, nb)
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
-    # One loop for each kind, so that each compiles to the work of its kind only.
-    if is_disk:
-        for q in range(BLOCK):
-            px, py, pz = point_at(z, ONE_P, q)
-            res, ok = _robust_row(True, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res)
-            z[ONE_OK, q] = ok
-    else:
-        for q in range(BLOCK):
-            px, py, pz = point_at(z, ONE_P, q)
-            res, ok = _robust_row(False, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res)
-            z[ONE_OK, q] = ok
-    for q in range(nb):
-        if z[ONE_OK, q] == 0.0:
-            px, py, pz = point_at(z, ONE_P, q)
-            # The robust method reads the unit normal only; it stands in for the normal as given.
-            res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
-            store(z, ONE_OUT, q, res[1:])
-    scatter_round(z, ONE_OUT, k0, nb, out, full)
+    copies, results = scratch(3, np.float64), scratch(8, np.float64)
+    codes, flags = scratch(1, np.int8), scratch(1, np.bool_)
+    oks = results[7]
+    for b0 in range(k0, k0 + nb, BLOCK):
+        bn = min(BLOCK, k0 + nb - b0)
+        p = block_vectors(copies, 0, P, n_j, b0, bn)
+        sinks = round_sinks(out, b0, bn, full, results, codes, flags)
+        left = _one_pass(sinks, oks, p, is_disk, full, True, cx, cy, cz, ux, uy, uz, radius)
+        if left:
+            left = _one_pass(sinks, oks, p, is_disk, full, False, cx, cy, cz, ux, uy, uz, radius)
+        if left:
+            for q in range(bn):
+                if oks[q] == 0.0:
+                    px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+                    # The robust method reads the unit normal only; it stands in for the normal as given.
+                    res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
+                    put_round(sinks, q, res[1:], full)
+        drain_round(sinks, out, b0, bn, full)
 
 
 # Per method: the query of one point, whether it has a SIMD loop (robust),
@@ -392,6 +495,7 @@ LAYOUT = Layout(
     flags=("is_disk",),
     arrays=(("center", 1), ("unit_normal", 1), ("normal", 1), ("radius", 0)),
     extra=(("equidistant", np.bool_, 1), ("height", np.float64, 1), ("radial", np.float64, 1)),
+    span=SPAN,
 )
 
 
