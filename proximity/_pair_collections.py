@@ -9,10 +9,9 @@ undecided.
 
 from fractions import Fraction
 
-import numba
 import numpy as np
 
-from . import _exact, _lazy, pairs, primitives
+from . import _exact, _lazy, _threads, pairs, primitives
 from ._rounding import unfaithful
 from .methods import CERTIFIED
 
@@ -82,12 +81,10 @@ def closest(sides, method, starts, radii, cutoff, pose, full, names):
     column = [
         primitives.N_PARAMS if s.params.shape[1] > primitives.N_PARAMS else -1 for s in (side_a, side_b)
     ]
-    many, one = bp.descent_kernel(method, present, pose is not None, column[0], column[1])
-    if n == 1:
-        one(side_a, side_b, pose_array, depth, magnitude, queries, out, full)
-    else:
-        with numba.parallel_chunksize(1):
-            many(side_a, side_b, pose_array, depth, magnitude, queries, out, full)
+    descend = bp.descent_kernel(method, present, pose is not None, column[0], column[1])
+    args = (side_a, side_b, pose_array, depth, magnitude, queries, out, full)
+    # Queries differ in work by orders of magnitude: handed out one at a time.
+    _threads.spread(lambda lo, hi: descend(lo, hi, *args), n, 1)
     rows = np.flatnonzero(~np.isnan(out.undecided))
     for q in rows:
         _resolve(side_a, side_b, present, q, queries, pose_array if pose is not None else None, depth,

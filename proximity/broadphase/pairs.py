@@ -56,7 +56,6 @@ import functools
 import math
 
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from .. import certified, pairs, primitives
@@ -138,8 +137,11 @@ _W1, _W2 = _array(types.float64, 1, False), _array(types.float64, 2, False)
 _WI, _W8 = _array(types.int64, 1, False), _array(types.int8, 1, False)
 _OUTPUTS = types.NamedTuple([_W1, _W1, _W1, _W2, _W2, _W8, _W8, _W2, _W2, _WI, _WI, _WI, _WI, _W1, _W1, _W1],
                             Outputs)  # fmt: skip
-#: The descent's signature: both sides, the pose, depth, magnitude, queries, outputs, full.
-_SIGNATURE = types.void(_TREE, _TREE, _F2, types.int64, types.float64, _QUERIES, _OUTPUTS, types.boolean)
+#: The descent's signature: a range of queries, both sides, the pose, depth, magnitude, queries,
+#: outputs, full.
+_SIGNATURE = types.void(
+    types.int64, types.int64, _TREE, _TREE, _F2, types.int64, types.float64, _QUERIES, _OUTPUTS, types.boolean
+)
 
 
 @inline
@@ -152,11 +154,13 @@ def _radii(ra, rb, certify):
 # -- the search -----------------------------------------------------------------------
 
 
-def _descend(A, B, pose, depth, magnitude, queries, out, full):
-    """Every query, on the threads: the least answer over the pairs of primitives below its
-    starting nodes (see the module docstring).  With ``full=False`` only ``signed``,
-    ``distance`` and ``undecided`` are written."""
-    for q in prange(queries.start_a.shape[0]):
+def _descend(lo, hi, A, B, pose, depth, magnitude, queries, out, full):
+    """Queries ``lo .. hi - 1``: the least answer over the pairs of primitives below each
+    query's starting nodes (see the module docstring).  With ``full=False`` only ``signed``,
+    ``distance`` and ``undecided`` are written.  One serial kernel that releases the GIL, run
+    on Python threads a range of queries at a time (:func:`proximity._threads.spread`): a
+    parallel loop would compile the search twice more (its parfor and a second body)."""
+    for q in range(lo, hi):
         _one(q, A, B, pose, depth, magnitude, queries, out, full)
 
 
@@ -532,16 +536,10 @@ def descent_kernel(method, present, posed, radius_a, radius_b):
     ):
         helpers[name] = specialize(func, tag, role="inline", **bindings, **helpers)
     one = specialize(_one, tag, role="part", **bindings, **helpers)
-    many = specialize(_descend, tag, _SIGNATURE, parallel=True, _one=one)
-    single = specialize(_single, tag, _SIGNATURE, _one=one)
-    # Entry points that skip Numba's dispatch (typing 40 arrays costs more than a small query):
+    descend = specialize(_descend, tag, _SIGNATURE, nogil=True, _one=one)
+    # The entry point skips Numba's dispatch (typing 40 arrays costs more than a small query):
     # the caller passes exactly the types of _SIGNATURE.
-    return tuple(k.overloads[tuple(_SIGNATURE.args)].entry_point for k in (many, single))
-
-
-def _single(A, B, pose, depth, magnitude, queries, out, full):
-    """:func:`_descend` for one query, without the threads' launch."""
-    _one(0, A, B, pose, depth, magnitude, queries, out, full)
+    return descend.overloads[tuple(_SIGNATURE.args)].entry_point
 
 
 # -- sides --------------------------------------------------------------------------
