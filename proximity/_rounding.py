@@ -24,13 +24,7 @@ def certify_difference(e, d, r, exact_rows):
     is less than half the spacing at ``e``, the nearer neighbour's distance
     at most.
     """
-    with np.errstate(invalid="ignore", over="ignore"):
-        back = e - d
-        err = (d - (e - back)) + (-r - back)
-        u = np.where(d == 0, 0.0, np.spacing(d))
-        gap = np.where(e == 0, 2.0**-1074, np.spacing(np.abs(e)) * 0.5)
-        ok = (np.abs(err) + u) * (1.0 + 2.0**-50) < gap
-    bad = np.flatnonzero(~ok.reshape(-1) & np.isfinite(e).reshape(-1))
+    bad = unfaithful(e, d, r)
     if len(bad) == 0:
         return e
     from . import _exact  # in Python: no compiled code
@@ -42,6 +36,18 @@ def certify_difference(e, d, r, exact_rows):
         bounds = primitive.kernels.exact_sqr_bounds(primitive.code, params, point)
         flat[k] = _exact.minus_radius(bounds, Fraction(float(radii[k])))
     return e
+
+
+def unfaithful(e, d, r):
+    """The flat rows where ``e = d - r`` is not known to be faithful for
+    ``d* - r`` (see :func:`certify_difference`)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        back = e - d
+        err = (d - (e - back)) + (-r - back)
+        u = np.where(d == 0, 0.0, np.spacing(d))
+        gap = np.where(e == 0, 2.0**-1074, np.spacing(np.abs(e)) * 0.5)
+        ok = (np.abs(err) + u) * (1.0 + 2.0**-50) < gap
+    return np.flatnonzero(~ok.reshape(-1) & np.isfinite(e).reshape(-1))
 
 
 def surface_points(p, c, d, r, rows_of):
