@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _lazy, _threads
+from . import _lazy, _pool, _threads
 from ._collection import Collection
 from ._meshlike import vertices_and_faces
 from ._typing import ArrayLike, Bools, Distances, Floats
@@ -701,9 +701,11 @@ class TriangleMesh(Collection):
             params, cull, bounds = broadphase.refit_faces(
                 v, self.faces, tree.index, tree.child, tree.count, tree.kinds
             )
+            stored = _pool.empty(cull.shape, np.float32)  # recycled, as the refit's rows
             moved = broadphase.assemble(
-                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds
-            )
+                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
+                (stored, stored),
+            )  # fmt: skip
         mesh = object.__new__(TriangleMesh)
         mesh._init(
             vertices=v,

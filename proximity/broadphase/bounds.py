@@ -47,6 +47,13 @@ of ``M``, the largest coordinate magnitude of the point and of every box:
   computed distance exceeds ``best``, so even ties are visited, and the
   lowest index wins in both.
 
+The tree keeps its primitives' cull rows in float32 (:func:`stored_cull`),
+half the memory: boxes rounded outwards, slab axes towards zero (no
+longer than before) with their ranges widened by what the rounding of the
+axis can move ``u . X`` over the box, then rounded outwards.  Each row
+still holds its primitive, so the argument above is unchanged; a
+coordinate beyond float32's range leaves its side of the box unbounded.
+
 ``eberly``'s circle is the exception: near the axis it takes the rim
 direction from rounding noise, so its closest point can leave the plane by
 up to ``R``.  For that method circles are bounded by the cube ``C +- R``
@@ -57,6 +64,7 @@ previous closest point bounds the search.
 import math
 
 import numpy as np
+from numba import prange
 
 from .. import primitives
 from .._fp import EPS
@@ -67,6 +75,10 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 
 #: Columns of a primitive's cull row: its box ``(lo, hi)``, then one slab ``(u, h_min, h_max)``.
 CULL_COLUMNS = 11
+
+_DOWN = np.float32(-np.inf)
+_UP = np.float32(np.inf)
+_ZERO = np.float32(0.0)
 
 
 @inline
@@ -211,6 +223,55 @@ def primitive_cull(kinds, params):
         for rows in (cull,) if looser is cull else (cull, looser):
             _widen(rows, radius)
     return cull, looser
+
+
+@inline
+def _stored_row(cull, k, out):
+    """Row ``k`` of :func:`stored_cull`."""
+    # Rounded to nearest, then one float32 step out: beyond the float64
+    # value by at least half a float32 spacing, which also covers the
+    # rounding of the float64 sums below; 1e39 goes to the largest float32
+    # below it, -1e39 to -inf.
+    for a in range(3):
+        out[k, a] = np.nextafter(np.float32(cull[k, a]), _DOWN)
+        out[k, 3 + a] = np.nextafter(np.float32(cull[k, 3 + a]), _UP)
+    # The axis towards zero, so it stays no longer than 1; u' . X differs
+    # from u . X by at most sum |u - u'| max(|lo|, |hi|) over the box
+    # (each difference exact: u' is u with low bits cleared).
+    widen = 0.0
+    for a in range(3):
+        u = cull[k, 6 + a]
+        f = np.float32(u)
+        if abs(np.float64(f)) > abs(u):
+            f = np.nextafter(f, _ZERO)
+        out[k, 6 + a] = f
+        d = abs(u - np.float64(f))
+        if d > 0.0:
+            widen += d * max(abs(cull[k, a]), abs(cull[k, 3 + a]))
+    widen *= 1.0 + 2.0**-40  # above the sum's rounding
+    out[k, 9] = np.nextafter(np.float32(cull[k, 9] - widen), _DOWN)
+    out[k, 10] = np.nextafter(np.float32(cull[k, 10] + widen), _UP)
+
+
+@kernel(parallel=True)
+def _stored_rows(cull, out):
+    for k in prange(cull.shape[0]):
+        _stored_row(cull, k, out)
+
+
+def stored_cull(cull, out=None):
+    """The cull rows ``(n, 11)`` as the tree keeps them: float32, each still
+    holding its primitive (see the module docstring), into ``out`` if given.
+
+    Parameters
+    ----------
+    cull : ndarray of float64, shape ``(n, CULL_COLUMNS)``
+        Rows of :func:`primitive_cull`.
+    out : ndarray of float32, shape ``(n, CULL_COLUMNS)``, optional
+    """
+    out = np.empty(cull.shape, np.float32) if out is None else out
+    _stored_rows(readonly(cull, np.float64), out)
+    return out
 
 
 def _widen(cull, radius):

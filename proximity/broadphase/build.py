@@ -22,7 +22,7 @@ from numba import prange
 from .. import primitives
 from .._jit import inline, kernel
 from ._alloc import GATHER_MIN, empty, readonly, take_rows
-from .bounds import CULL_COLUMNS, plane_row, primitive_cull
+from .bounds import CULL_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
 
@@ -432,25 +432,31 @@ def face_params(vertices, faces, order=None):
     return params
 
 
-def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None):
+def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
     ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
     computed here when not given; the node bounds are fitted to them unless
-    given (those of the tight rows: a tree without loose rows).
+    given (those of the tight rows: a tree without loose rows).  The tree
+    keeps them as :func:`stored_cull` gives them, in float32, in the arrays
+    ``stored`` ``(tight, loose)`` where given.
     """
     tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = readonly(kinds, np.int8)
     params = readonly(params, np.float64)
     child = readonly(child, np.int64)
     count = readonly(count, np.int64)
-    tight_ro = readonly(tight, np.float64)
-    bounds = readonly(refit(child, count, kinds, params, tight_ro) if bounds is None else bounds, np.float64)
-    if loose is tight:
+    same = loose is tight
+    tight = readonly(tight, np.float64)
+    bounds = readonly(refit(child, count, kinds, params, tight) if bounds is None else bounds, np.float64)
+    tight_out, loose_out = (None, None) if stored is None else stored
+    tight_ro = readonly(stored_cull(tight, tight_out), np.float32)
+    if same:
         loose_ro, loose_bounds = tight_ro, bounds
     else:
-        loose_ro = readonly(loose, np.float64)
-        loose_bounds = readonly(refit(child, count, kinds, params, loose_ro), np.float64)
+        loose = readonly(loose, np.float64)
+        loose_bounds = readonly(refit(child, count, kinds, params, loose), np.float64)
+        loose_ro = readonly(stored_cull(loose, loose_out), np.float32)
     return Tree(
         kinds=kinds,
         params=params,

@@ -27,9 +27,10 @@ class Tree:
         for brute force.
     bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
         Node boxes and oriented boxes (see :func:`refit`).
-    cull : ndarray of float64, shape ``(n, 11)``
-        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``.
-    loose_bounds, loose_cull : ndarray of float64
+    cull : ndarray of float32, shape ``(n, 11)``
+        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``,
+        rounded outwards (:func:`~.bounds.stored_cull`).
+    loose_bounds, loose_cull : ndarray of float64, float32
         The same for ``eberly`` (the same arrays unless there are circles).
     depth : int
         Depth of the deepest leaf.
