@@ -33,7 +33,7 @@ from ._validate import (
     frozen_float64,
     require_finite,
 )
-from .primitives import TRIANGLE
+from .primitives import N_PARAMS, TRIANGLE
 from .results import MeshResult, _frozen, format_repr
 from .shapes import DEFAULT_METHOD, keyword_only
 
@@ -130,7 +130,7 @@ class TriangleMesh(Collection):
             broad_phase,
             len(f),
             lambda bp: bp.build_faces(v, f, TRIANGLE.code),
-            lambda bp: bp.brute(*_primitives(v, f)),
+            lambda bp: bp.brute(*_primitives(v, f, bp.FACE_COLUMNS)),
         )
         self._init(
             vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None, _winding=None, _normals=None
@@ -741,7 +741,7 @@ class TriangleMesh(Collection):
 
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""
-        return _primitives(self.vertices, self.faces[index])
+        return _primitives(self.vertices, self.faces[index], _face_columns())
 
     def _rows(self):
         """``(kinds, params)`` of every face, in order, as a collection stores them."""
@@ -762,10 +762,16 @@ def _points(points):
     return points
 
 
-def _primitives(vertices, faces):
-    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
+def _primitives(vertices, faces, width=N_PARAMS):
+    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine
+    coordinates, in rows ``width`` wide."""
     broadphase = _lazy.load("proximity.broadphase")
-    return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces)
+    return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces, width=width)
+
+
+def _face_columns():
+    """The width of the rows of a mesh's own tree."""
+    return _lazy.load("proximity.broadphase").FACE_COLUMNS
 
 
 @dataclasses.dataclass(frozen=True, repr=False)

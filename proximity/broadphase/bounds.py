@@ -76,6 +76,11 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 #: Columns of a primitive's cull row: its box ``(lo, hi)``, then one slab ``(u, h_min, h_max)``.
 CULL_COLUMNS = 11
 
+#: Columns of the rows of a tree of faces alone (hulls of three points):
+#: their nine coordinates, without the padding of a collection of several
+#: kinds to :data:`~proximity.primitives.N_PARAMS`.
+FACE_COLUMNS = 9
+
 _DOWN = np.float32(-np.inf)
 _UP = np.float32(np.inf)
 _ZERO = np.float32(0.0)

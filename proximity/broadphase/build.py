@@ -22,7 +22,7 @@ from numba import prange
 from .. import primitives
 from .._jit import inline, kernel
 from ._alloc import GATHER_MIN, empty, readonly, take_rows
-from .bounds import CULL_COLUMNS, plane_row, primitive_cull, stored_cull
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
 
@@ -416,18 +416,20 @@ def _face_gather(vertices, faces, order, params):
         _face_params(vertices, faces, order, params, np.int64(j))
 
 
-def face_params(vertices, faces, order=None):
-    """The stored rows ``(F, primitives.N_PARAMS)`` of the faces ``faces`` of
-    ``vertices`` (those ``faces[order]``, if given), hulls of three points:
-    each face's nine coordinates, then zeros."""
+def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
+    """The stored rows ``(F, width)`` of the faces ``faces`` of ``vertices``
+    (those ``faces[order]``, if given), hulls of three points: each face's
+    nine coordinates, then zeros.  A collection of several kinds has rows
+    of ``N_PARAMS`` columns (the default); a tree of faces alone keeps
+    :data:`FACE_COLUMNS`."""
     if order is None and len(faces) < GATHER_MIN:
-        params = np.empty((len(faces), primitives.N_PARAMS))
+        params = np.empty((len(faces), width))
         # Gathered straight into the rows; the faces index the vertices.
         np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
         params[:, 9:] = 0.0
         return params
     order = np.arange(len(faces)) if order is None else order
-    params = empty(len(order), primitives.N_PARAMS)
+    params = empty(len(order), width)
     _face_gather(readonly(vertices, np.float64), readonly(faces, np.int64), readonly(order, np.int64), params)
     return params
 
@@ -519,7 +521,7 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     it), primitives of kind ``kind`` that are hulls of three points, without
     their parameters in the faces' order: the faces' boxes, slabs and
     hashes come from the vertices in one pass, and their parameters are
-    gathered once, in leaf order."""
+    gathered once, in leaf order, :data:`FACE_COLUMNS` wide."""
     vertices = readonly(vertices, np.float64)
     faces = readonly(faces, np.int64)
     n = len(faces)
@@ -528,7 +530,7 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     _face_rows(vertices, faces, kind, cull, hashes)
     kinds = np.full(n, kind, np.int8)
     if not _all_different(hashes):
-        return build_tree(kinds, face_params(vertices, faces), leaf_size)
+        return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)
     child, count, order, depth = _build(cull, int(leaf_size))
-    params = face_params(vertices, faces, order)
+    params = face_params(vertices, faces, order, FACE_COLUMNS)
     return assemble(kinds, params, order, child, count, depth, (cull, cull))

@@ -14,7 +14,7 @@ from numba import prange
 from .. import _pool, primitives
 from .._jit import inline, kernel
 from ._alloc import empty, readonly
-from .bounds import CULL_COLUMNS, plane_row
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
@@ -444,7 +444,7 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
     # over the memory of the frame before, once that mesh is gone, rather than
     # the system's fresh pages, whose first writes cost as much as the refit.
-    params = _pool.empty((len(order), N_PARAMS))
+    params = _pool.empty((len(order), FACE_COLUMNS))
     cull = _pool.empty((len(order), CULL_COLUMNS))
     vertices, faces, order = (
         readonly(vertices, np.float64),

@@ -17,7 +17,8 @@ class Tree:
     kinds : ndarray of int8, shape ``(n,)``
         The kind code of each stored primitive (see :mod:`proximity.primitives`).
     params : ndarray of float64, shape ``(n, N_PARAMS)``
-        Each stored primitive's parameters.
+        Each stored primitive's parameters (``FACE_COLUMNS`` wide in a tree
+        of faces alone, one wider with radii).
     index : ndarray of int64, shape ``(n,)``
         The caller's index of each stored primitive.
     child, count : ndarray of int64, shape ``(m,)``
