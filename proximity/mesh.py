@@ -701,10 +701,10 @@ class TriangleMesh(Collection):
             params, cull, bounds = broadphase.refit_faces(
                 v, self.faces, tree.index, tree.child, tree.count, tree.kinds
             )
-            stored = _pool.empty(cull.shape, np.float32)  # recycled, as the refit's rows
+            # The float32 rows it keeps on recycled memory too, as the refit's.
             moved = broadphase.assemble(
                 tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
-                (stored, stored),
+                empty=_pool.empty,
             )  # fmt: skip
         mesh = object.__new__(TriangleMesh)
         mesh._init(

@@ -264,17 +264,17 @@ def _stored_rows(cull, out):
         _stored_row(cull, k, out)
 
 
-def stored_cull(cull, out=None):
+def stored_cull(cull, empty=np.empty):
     """The cull rows ``(n, 11)`` as the tree keeps them: float32, each still
-    holding its primitive (see the module docstring), into ``out`` if given.
+    holding its primitive (see the module docstring), in an array from
+    ``empty(shape, dtype)``.
 
     Parameters
     ----------
     cull : ndarray of float64, shape ``(n, CULL_COLUMNS)``
         Rows of :func:`primitive_cull`.
-    out : ndarray of float32, shape ``(n, CULL_COLUMNS)``, optional
     """
-    out = np.empty(cull.shape, np.float32) if out is None else out
+    out = empty(cull.shape, np.float32)
     _stored_rows(readonly(cull, np.float64), out)
     return out
 

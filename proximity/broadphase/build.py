@@ -434,31 +434,38 @@ def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
     return params
 
 
-def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None):
+def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None, empty=np.empty):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
     ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
-    computed here when not given; the node bounds are fitted to them unless
-    given (those of the tight rows: a tree without loose rows).  The tree
-    keeps them as :func:`stored_cull` gives them, in float32, in the arrays
-    ``stored`` ``(tight, loose)`` where given.
+    computed here when neither it nor ``stored`` is given; the node bounds
+    are fitted to them unless given (those of the tight rows: a tree
+    without loose rows).  The tree keeps them as :func:`stored_cull` gives
+    them, in float32, in arrays from ``empty(shape, dtype)``; a tree of
+    unrounded hulls of points alone may give those rows (``stored``)
+    instead of ``cull``, having dropped the float64 ones.
     """
-    tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = readonly(kinds, np.int8)
     params = readonly(params, np.float64)
     child = readonly(child, np.int64)
     count = readonly(count, np.int64)
-    same = loose is tight
-    tight = readonly(tight, np.float64)
-    bounds = readonly(refit(child, count, kinds, params, tight) if bounds is None else bounds, np.float64)
-    tight_out, loose_out = (None, None) if stored is None else stored
-    tight_ro = readonly(stored_cull(tight, tight_out), np.float32)
-    if same:
+    if stored is not None:
+        tight = loose = tight_ro = readonly(stored, np.float32)
+    else:
+        tight, loose = primitive_cull(kinds, params) if cull is None else cull
+        same = loose is tight
+        tight = readonly(tight, np.float64)
+        loose = tight if same else loose
+        tight_ro = readonly(stored_cull(tight, empty), np.float32)
+    if bounds is None:
+        bounds = refit(child, count, kinds, params, tight, tight_ro)
+    bounds = readonly(bounds, np.float64)
+    if loose is tight:
         loose_ro, loose_bounds = tight_ro, bounds
     else:
         loose = readonly(loose, np.float64)
-        loose_bounds = readonly(refit(child, count, kinds, params, loose), np.float64)
-        loose_ro = readonly(stored_cull(loose, loose_out), np.float32)
+        loose_ro = readonly(stored_cull(loose, empty), np.float32)
+        loose_bounds = readonly(refit(child, count, kinds, params, loose, loose_ro), np.float64)
     return Tree(
         kinds=kinds,
         params=params,
@@ -532,5 +539,10 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     if not _all_different(hashes):
         return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)
     child, count, order, depth = _build(cull, int(leaf_size))
+    # The float32 rows the tree keeps, and the float64 ones dropped before
+    # the faces' rows are gathered and the nodes fitted (to the faces'
+    # points), which halves the build's peak.
+    stored = stored_cull(cull)
+    del cull, hashes
     params = face_params(vertices, faces, order, FACE_COLUMNS)
-    return assemble(kinds, params, order, child, count, depth, (cull, cull))
+    return assemble(kinds, params, order, child, count, depth, stored=stored)

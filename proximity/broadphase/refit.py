@@ -93,6 +93,34 @@ def _merge(bounds, i, rows, first, last):
 
 
 @inline
+def _merge_leaf(bounds, i, first, last, kinds, params, cull, normals, vertices):
+    """Leaf ``i``'s box and normal sum (columns 6-8) over its stored
+    primitives ``first .. last - 1``: the extremes of the points of those
+    that are hulls of points (their cull rows' boxes, exactly, where they
+    are not rounded), the boxes of the ``cull`` rows of the others; the
+    normals of their ``normals`` rows (the tree's float32 ones, which a
+    tree of hulls alone keeps instead of its float64 ``cull`` rows)."""
+    rounded = params.shape[1] > N_PARAMS
+    for a in range(3):
+        bounds[i, a] = math.inf
+        bounds[i, 3 + a] = -math.inf
+        bounds[i, 6 + a] = 0.0
+    for k in range(first, last):
+        n = vertices[kinds[k]]
+        if n > 0 and not rounded:
+            for c in range(n):
+                for a in range(3):
+                    bounds[i, a] = min(bounds[i, a], params[k, 3 * c + a])
+                    bounds[i, 3 + a] = max(bounds[i, 3 + a], params[k, 3 * c + a])
+        else:
+            for a in range(3):
+                bounds[i, a] = min(bounds[i, a], cull[k, a])
+                bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
+        for a in range(3):
+            bounds[i, 6 + a] += normals[k, 6 + a]
+
+
+@inline
 def _frame(bounds, i):
     """Node ``i``'s axes from its normal sum: ``u`` the sum normalised and
     shortened, ``v`` and ``w`` across it (:func:`_across`)."""
@@ -179,7 +207,7 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
 
 
 @inline
-def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, vertices):
+def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, normals, vertices):
     """Every node of the subtree at ``root``: boxes and normal sums from the
     leaves up, then, but for ``root`` itself, its frame and slab ranges."""
     # A subtree over c primitives has at most 2 c - 1 nodes.
@@ -203,7 +231,7 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, ve
         if count[i] > 0:
             start[i] = child[i]
             end[i] = child[i] + count[i]
-            _merge(bounds, i, cull, start[i], end[i])
+            _merge_leaf(bounds, i, start[i], end[i], kinds, params, cull, normals, vertices)
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
@@ -372,7 +400,7 @@ def _fit_faces(
 
 
 @kernel(parallel=True)
-def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, vertices):
+def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, vertices):
     """The bounds of every node (see :func:`refit`).
 
     The subtrees at ``tasks`` are fitted one per task; then the boxes and
@@ -380,7 +408,7 @@ def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, vert
     ranges of the top nodes and of the subtrees' roots, one per task.
     """
     for j in prange(tasks.shape[0]):
-        _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, vertices)
+        _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, normals, vertices)
     for t in range(top.shape[0] - 1, -1, -1):
         _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
     for j in prange(top.shape[0] + tasks.shape[0]):
@@ -389,8 +417,14 @@ def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, vert
         _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
 
 
-def refit(child, count, kinds, params, cull):
+def refit(child, count, kinds, params, cull, normals=None):
     """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+
+    ``cull`` are their cull rows, whose boxes bound the primitives that are
+    not unrounded hulls of points (those are bounded by their points);
+    ``normals`` the rows whose slab axes are summed into the nodes' ``u``
+    (``cull`` unless given: a tree passes its float32 rows, the same
+    whether it was built or unpickled).
 
     Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
     ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
@@ -407,13 +441,13 @@ def refit(child, count, kinds, params, cull):
     Exact ranges cost O(primitives) per level of the tree; a refit
     (:func:`refit_faces`) merges them instead.
     """
+    normals = cull if normals is None else normals
     if len(child) == 1:
         # One leaf (brute force): the traversal goes straight to its
         # primitives and never tests its bounds, which need only its box,
         # the scale of the pruning tests; the slabs bound nothing.
         bounds = np.zeros((1, NODE_COLUMNS))
-        bounds[0, 0:3] = cull[:, 0:3].min(axis=0)
-        bounds[0, 3:6] = cull[:, 3:6].max(axis=0)
+        bounds[0, 0:6] = _leaf_box(kinds, params, cull)
         bounds[0, 9::5] = -math.inf
         bounds[0, 10::5] = math.inf
         return bounds
@@ -421,8 +455,23 @@ def refit(child, count, kinds, params, cull):
     bounds = empty(len(child), NODE_COLUMNS)
     # Tasks differ in size by orders of magnitude: handed out one at a time.
     with numba.parallel_chunksize(1):
-        _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, _VERTICES)
+        _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, _VERTICES)
     return bounds
+
+
+def _leaf_box(kinds, params, cull):
+    """The box ``(lo, hi)`` of every stored primitive, as :func:`_merge_leaf` bounds them."""
+    lo, hi = np.full(3, math.inf), np.full(3, -math.inf)
+    rounded = params.shape[1] > N_PARAMS
+    for p in primitives.present(kinds):
+        rows = kinds == p.code
+        if p.vertices and not rounded:
+            points = params[rows, : 3 * p.vertices].reshape(-1, 3)
+            lo, hi = np.minimum(lo, points.min(axis=0)), np.maximum(hi, points.max(axis=0))
+        else:
+            lo = np.minimum(lo, cull[rows, 0:3].min(axis=0))
+            hi = np.maximum(hi, cull[rows, 3:6].max(axis=0))
+    return np.concatenate([lo, hi])
 
 
 def refit_faces(vertices, faces, order, child, count, kinds):
