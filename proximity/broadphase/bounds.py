@@ -81,9 +81,7 @@ CULL_COLUMNS = 11
 #: kinds to :data:`~proximity.primitives.N_PARAMS`.
 FACE_COLUMNS = 9
 
-_DOWN = np.float32(-np.inf)
-_UP = np.float32(np.inf)
-_ZERO = np.float32(0.0)
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @inline
@@ -231,31 +229,44 @@ def primitive_cull(kinds, params):
 
 
 @inline
+def _down32(x):
+    """A float32 at most ``x``: ``x`` moved down by a float32 spacing (``2^-23`` of
+    it, and the least subnormal), then rounded to nearest, which moves it
+    back up by half a spacing at most; the float64 rounding of the move is
+    far inside the other half.  1e39 goes to the largest float32, -1e39 to
+    -inf; infinities stay."""
+    if not math.isfinite(x):
+        return np.float32(x)
+    return np.float32(min(x - abs(x) * 2.0**-23 - 2.0**-149, _FLOAT32_MAX))
+
+
+@inline
+def _up32(x):
+    """A float32 at least ``x`` (see :func:`_down32`)."""
+    return -_down32(-x)
+
+
+@inline
 def _stored_row(cull, k, out):
     """Row ``k`` of :func:`stored_cull`."""
-    # Rounded to nearest, then one float32 step out: beyond the float64
-    # value by at least half a float32 spacing, which also covers the
-    # rounding of the float64 sums below; 1e39 goes to the largest float32
-    # below it, -1e39 to -inf.
     for a in range(3):
-        out[k, a] = np.nextafter(np.float32(cull[k, a]), _DOWN)
-        out[k, 3 + a] = np.nextafter(np.float32(cull[k, 3 + a]), _UP)
+        out[k, a] = _down32(cull[k, a])
+        out[k, 3 + a] = _up32(cull[k, 3 + a])
     # The axis towards zero, so it stays no longer than 1; u' . X differs
     # from u . X by at most sum |u - u'| max(|lo|, |hi|) over the box
-    # (each difference exact: u' is u with low bits cleared).
+    # (each difference exact: u' is near u, on a grid as fine as u's), and
+    # the widening is rounded up beyond the sum's rounding.
     widen = 0.0
     for a in range(3):
         u = cull[k, 6 + a]
-        f = np.float32(u)
-        if abs(np.float64(f)) > abs(u):
-            f = np.nextafter(f, _ZERO)
-        out[k, 6 + a] = f
-        d = abs(u - np.float64(f))
+        f = math.copysign(max(np.float64(_down32(abs(u))), 0.0), u)
+        out[k, 6 + a] = np.float32(f)
+        d = abs(u - f)
         if d > 0.0:
             widen += d * max(abs(cull[k, a]), abs(cull[k, 3 + a]))
-    widen *= 1.0 + 2.0**-40  # above the sum's rounding
-    out[k, 9] = np.nextafter(np.float32(cull[k, 9] - widen), _DOWN)
-    out[k, 10] = np.nextafter(np.float32(cull[k, 10] + widen), _UP)
+    widen *= 1.0 + 2.0**-40
+    out[k, 9] = _down32(cull[k, 9] - widen)
+    out[k, 10] = _up32(cull[k, 10] + widen)
 
 
 @kernel(parallel=True)
