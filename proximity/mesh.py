@@ -130,7 +130,7 @@ class TriangleMesh(Collection):
             broad_phase,
             len(f),
             lambda bp: bp.build_faces(v, f, TRIANGLE.code),
-            lambda bp: bp.brute(*_primitives(v, f, bp.FACE_COLUMNS)),
+            lambda bp: bp.brute(*_primitives(v, f, TRIANGLE.width)),
         )
         self._init(
             vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None, _winding=None, _normals=None
@@ -741,7 +741,7 @@ class TriangleMesh(Collection):
 
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""
-        return _primitives(self.vertices, self.faces[index], _face_columns())
+        return _primitives(self.vertices, self.faces[index], TRIANGLE.width)
 
     def _rows(self):
         """``(kinds, params)`` of every face, in order, as a collection stores them."""
@@ -763,15 +763,9 @@ def _points(points):
 
 
 def _primitives(vertices, faces, width=N_PARAMS):
-    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine
-    coordinates, in rows ``width`` wide."""
+    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates, ``width`` wide."""
     broadphase = _lazy.load("proximity.broadphase")
     return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces, width=width)
-
-
-def _face_columns():
-    """The width of the rows of a mesh's own tree."""
-    return _lazy.load("proximity.broadphase").FACE_COLUMNS
 
 
 @dataclasses.dataclass(frozen=True, repr=False)
