@@ -69,6 +69,7 @@ bench: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m benchmarks --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes
 	$(BIN)/python -m benchmarks.moving
+	$(BIN)/python -m benchmarks.pairs
 	$(BIN)/python -m benchmarks.signs
 	$(BIN)/python -m benchmarks.scale
 
@@ -77,6 +78,7 @@ bench-quick: $(STAMP) $(CORE_STAMP) $(PEERS_STAMP)
 	$(BIN)/python -m benchmarks --quick --package-python $(CORE)/bin/python
 	$(BIN)/python -m benchmarks.meshes --quick
 	$(BIN)/python -m benchmarks.moving --quick
+	$(BIN)/python -m benchmarks.pairs --quick
 	$(BIN)/python -m benchmarks.signs --quick
 	$(BIN)/python -m benchmarks.scale --quick
 

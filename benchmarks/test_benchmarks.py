@@ -3,7 +3,8 @@
 The summary never states an error where d* = 0 in ulps of 0; relative
 errors leave those rows out; the speed table states facts and the targets
 go to the checks; the mesh chart draws; the point-cloud benchmark runs and
-cleans up after itself.
+cleans up after itself; the mesh-pair benchmark's reference is the exact
+minimum over every pair of faces.
 """
 
 import json
@@ -120,3 +121,26 @@ def test_the_mesh_chart_draws_from_the_peers_data(tmp_path):
     }
     path = charts.mesh_peers(raw, tmp_path / "mesh_peers.png")
     assert path.exists() and path.stat().st_size > 10_000
+
+
+def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
+    import mpmath
+    import numpy as np
+
+    from benchmarks import pairs
+    from proximity.posed import to_world
+    from proximity.testing import exact
+    from proximity.testing.meshes import icosphere, torus
+
+    (va, fa), (vb, fb) = icosphere(1), torus(6, 4)
+    rng = np.random.default_rng(2)
+    for gap in (0.3, -0.05):
+        pose = pairs.poses(pairs.proximity.TriangleMesh(va, fa), pairs.proximity.TriangleMesh(vb, fb), rng,
+                           gap, 1)[0]  # fmt: skip
+        posed = to_world(vb, pose[:3, :3], pose[:3, 3])
+        every = min(exact.triangle_triangle_closest(va[i], posed[j]).sqr_distance for i in fa for j in fb)
+        with mpmath.workprec(exact.PREC):
+            expected = mpmath.sqrt(exact.to_mpf(every))
+            got, checked = pairs.exact_distance(va, fa, posed, fb, max(gap, 0.0) + 0.01)
+            assert got == expected and checked < len(fa) * len(fb)
+        assert (expected == 0) == (gap < 0)

@@ -55,6 +55,7 @@ from .results import (  # noqa: E402
     DiskResult,
     Feature,
     MeshResult,
+    PairResult,
     PointResult,
     Result,
     SceneResult,
@@ -73,6 +74,7 @@ __all__ = [
     "Feature",
     "Inflated",
     "MeshResult",
+    "PairResult",
     "Point",
     "PointResult",
     "Posed",
@@ -88,8 +90,10 @@ __all__ = [
     "TriangleResult",
     "certified_stats",
     "closest_point",
+    "closest_points",
     "distance",
     "release_memory",
+    "signed_distance",
     "threads",
 ]
 
@@ -192,23 +196,25 @@ def closest_point(
 @keyword_only_signature
 def distance(
     shape: Shape,
-    points: ArrayLike,
+    points: ArrayLike | Shape,
     *args: object,
     method: str = DEFAULT_METHOD,
     max_distance: float | None = None,
 ) -> Distances:
-    """Distance from each of ``points`` to ``shape``.
+    """Distance from each of ``points`` to ``shape``, or between two shapes.
 
     The function form of ``shape.distance(points, method=method)``: any
     shape, points and method of :func:`closest_point` (a mesh, a scene, a
     rounded shape, a batch of primitives), the distances alone computed.
+    Where ``points`` is a shape too, the distance between the two shapes,
+    as :func:`closest_points` gives it.
 
     Parameters
     ----------
     shape : Shape
         As in :func:`closest_point`.
-    points : array_like, shape ``(..., 3)``
-        As in :func:`closest_point`.
+    points : array_like, shape ``(..., 3)``, or Shape
+        As in :func:`closest_point`, or a second shape (see :func:`closest_points`).
     method : str, keyword-only
         As in :func:`closest_point`; default ``"robust"``.
     max_distance : float, optional, keyword-only
@@ -236,7 +242,123 @@ def distance(
             "distance() takes two positional arguments, shape and points; method is keyword-only: "
             f"distance(shape, points, method={args[0]!r})"
         )
+    if type(points) in _SHAPE_TYPES or hasattr(points, "_rows") and hasattr(points, "batch_shape"):
+        return _pair_queries().distance(shape, points, method=method, max_distance=max_distance)
     return shape.distance(points, method=method, max_distance=max_distance)
+
+
+def _pair_queries():
+    from . import pair_queries
+
+    return pair_queries
+
+
+@keyword_only_signature
+def closest_points(
+    a: Shape,
+    b: Shape,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> PairResult:
+    """Closest points of two shapes: the distance between them and a witness on each.
+
+    Parameters
+    ----------
+    a, b : Shape
+        Two shapes of the same dimension: batches of segments, triangles or
+        points, a :class:`TriangleMesh` or a :class:`Scene`, posed views of
+        them (``shape.transformed(T)``, searched in place, without a
+        rebuild), or any of them rounded (:class:`Inflated`,
+        :class:`Sphere`, :class:`Capsule`).  Batches broadcast against each
+        other like points against a shape: ``(N,)`` segments with ``(N,)``
+        triangles give N pairs, ``(M,)`` with ``(N, 1)`` all ``N x M``
+        pairs; a mesh or a scene is one shape.  Disks and circles pair with
+        points only, and a scene of posed meshes (instances) is not searched
+        (``NotImplementedError`` naming the argument).
+    method : {"robust", "certified"}, keyword-only
+        ``robust`` (default) is within ``16 eps S + 2^-1075`` of the exact
+        distance, ``S`` the largest coordinate difference between the
+        pair's vertices; ``certified`` is faithfully rounded, with the exact
+        closest features (lowest feature codes among ties).  Meshes and
+        scenes answer with the least of their primitives' pairs, computed
+        by the same method, ties to the lowest ``(face_a, face_b)`` (or
+        primitives), except between touching or overlapping shapes, where
+        the search stops at the first common point it finds.  Posed views
+        add the rounding of the pose, a few ``eps`` of the coordinates'
+        magnitude (see :mod:`proximity.posed`).
+    max_distance : float, keyword-only, optional
+        Nothing within it: ``inf`` distance, NaN points, feature ``NONE``
+        and index -1 for pairs farther apart.  It prunes the search of
+        meshes and scenes.
+
+    Returns
+    -------
+    PairResult
+        Distance, squared distance, a witness point on each shape and its
+        feature, each side's parameters (segment parameter, barycentrics,
+        face, scene primitive).  Touching or overlapping shapes give 0 and a
+        common point.  Rounded shapes give ``max(d - r_a - r_b, 0)`` and
+        witnesses on their surfaces, along the cores' witness direction.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [4, 0, 0], [0, 4, 0]])
+    >>> rod = proximity.Segment([[1, 1, 1], [1, 1, 3]])
+    >>> r = proximity.closest_points(rod, tri)
+    >>> float(r.distance), r.point_a.tolist(), r.point_b.tolist()
+    (1.0, [1.0, 1.0, 1.0], [1.0, 1.0, 0.0])
+    >>> str(r.feature_name_a), str(r.feature_name_b), r.barycentric_b.tolist()
+    ('VERTEX0', 'FACE', [0.5, 0.25, 0.25])
+    >>> pills = proximity.Capsule([[[0, 0, 0], [0, 0, 4]], [[3, 0, 0], [3, 0, 4]]], radius=0.5)
+    >>> proximity.distance(pills, proximity.Sphere([1, 0, 2], 0.25)).tolist()
+    [0.25, 1.25]
+    >>> import numpy as np
+    >>> tet = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    ...                              [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> T = np.eye(4); T[:3, 3] = [0, 0, 3]          # a copy moved up by 3
+    >>> r = proximity.closest_points(tet, tet.transformed(T))
+    >>> float(r.distance), r.point_a.tolist(), r.point_b.tolist()
+    (2.0, [0.0, 0.0, 1.0], [0.0, 0.0, 3.0])
+    """
+    if args:
+        raise TypeError(
+            "closest_points() takes two positional arguments, a and b; method is keyword-only: "
+            f"closest_points(a, b, method={args[0]!r})"
+        )
+    return _pair_queries().closest_points(a, b, method=method, max_distance=max_distance)
+
+
+@keyword_only_signature
+def signed_distance(
+    a: Shape,
+    b: Shape,
+    *args: object,
+    method: str = DEFAULT_METHOD,
+    max_distance: float | None = None,
+) -> Distances:
+    """Signed distance between two shapes: ``d - r_a - r_b``, negative where they overlap.
+
+    For rounded shapes (:class:`Inflated`, :class:`Sphere`, :class:`Capsule`)
+    the distance of their cores less both radii: minus the depth of
+    penetration along the cores' witness direction where they overlap;
+    for other shapes, the distance.  Arguments as for :func:`closest_points`.
+
+    Examples
+    --------
+    >>> import proximity
+    >>> a = proximity.Capsule([[0, 0, 0], [4, 0, 0]], radius=1.0)
+    >>> b = proximity.Sphere([2, 0, 1.5], 1.0)
+    >>> float(proximity.signed_distance(a, b))
+    -0.5
+    """
+    if args:
+        raise TypeError(
+            "signed_distance() takes two positional arguments, a and b; method is keyword-only: "
+            f"signed_distance(a, b, method={args[0]!r})"
+        )
+    return _pair_queries().signed_distance(a, b, method=method, max_distance=max_distance)
 
 
 def release_memory() -> int:

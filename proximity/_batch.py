@@ -12,22 +12,25 @@ block functions, one per method, and the exact answer of one query.
 """
 
 import collections
+import functools
 from dataclasses import dataclass
 
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from . import _counts, _pool
 from ._jit import launcher
 from ._loops import A_IN3, BLOCK, OUT_FLAG, loop_views, single_shape
 
-# Bound by :func:`proximity._jit.launcher`: the call of the block function.
+# Bound by :func:`proximity._jit.launcher`: the call of the block function,
+# and how many blocks of queries it is given at a time (:attr:`Layout.span`).
 CALL = None
+SPAN = 1
 
 
-def _loop(handle, shape, P, n_j, out, exact, full):
-    """Every block of queries of an ``(I, J)`` loop, on the threads.
+def _loop(handle, lo, hi, shape, P, n_j, out, exact, full):
+    """Calls ``lo .. hi - 1`` of the block function over an ``(I, J)`` loop,
+    ``SPAN`` blocks of queries each (the last one fewer queries).
 
     ``shape`` is the primitive's record of broadcast arrays ``(I, J, ...)``,
     ``P`` the points ``(I, J, 3)``, ``out`` the record of flat outputs;
@@ -35,10 +38,22 @@ def _loop(handle, shape, P, n_j, out, exact, full):
     the distances are written.
     """
     n = out[0].shape[0]
-    for block in prange((n + BLOCK - 1) // BLOCK):
-        k0 = block * BLOCK
-        nb = min(BLOCK, n - k0)
+    run = SPAN * BLOCK
+    for task in range(lo, hi):
+        k0 = task * run
+        nb = min(run, n - k0)
         CALL(handle, shape, P, n_j, k0, nb, out, exact, full)
+
+
+def _blocks(run, shape, P, n_j, out, exact, full):
+    """The number of calls of the block function in :func:`_loop`, ``run`` queries each."""
+    return (out[0].shape[0] + run - 1) // run
+
+
+#: Fewest blocks of queries a thread takes at a time: a thread started for
+#: fewer would cost more than the queries it answers (a layout of ``span``
+#: blocks per call: this many over ``span`` calls).
+BATCH_GRAIN = 16
 
 
 _FLOAT1 = types.Array(types.float64, 1, "C")
@@ -73,29 +88,37 @@ class Layout:
     extra : tuple of (str, dtype, int)
         Outputs after :data:`COMMON`: name, dtype and width (1 for a
         scalar per query).
+    span : int
+        Blocks of :data:`~proximity._loops.BLOCK` queries that a block
+        function is given per call: ``nb`` is then up to ``span * BLOCK``,
+        and the block function works through them a block at a time.  A
+        call costs about as much as tens of cheap queries (its arguments are
+        copied twice on the way in, and the compute loop's pipeline fills
+        again), which a span spreads over more of them.
     """
 
     name: str
     flags: tuple
     arrays: tuple
     extra: tuple
+    span: int = 1
 
-    @property
+    @functools.cached_property
     def outputs(self):
         """Every output: ``(name, dtype, width)``, :data:`COMMON` first."""
         return COMMON + self.extra
 
-    @property
+    @functools.cached_property
     def shape_record(self):
         """The namedtuple class of the shape's record."""
         return _record(f"{self.name.title()}Arrays", self.flags + tuple(a for a, _ in self.arrays))
 
-    @property
+    @functools.cached_property
     def out_record(self):
         """The namedtuple class of the outputs."""
         return _record(f"{self.name.title()}Outputs", tuple(name for name, _, _ in self.outputs))
 
-    @property
+    @functools.cached_property
     def block_signature(self):
         """The block functions' signature: ``(shape, P, n_j, k0, nb, out, exact, full)``."""
         # As Numba types the records passed in: uniform ones are NamedUniTuples.
@@ -108,11 +131,11 @@ class Layout:
         i64 = types.int64
         return types.void(shape, A_IN3, i64, i64, i64, out, OUT_FLAG, types.boolean)
 
-    @property
+    @functools.cached_property
     def loop_signature(self):
-        """The loop's signature: a handle, then the block's arguments but ``k0, nb``."""
+        """The loop's signature: a handle, a range of blocks, then the block's arguments but ``k0, nb``."""
         args = self.block_signature.args
-        return types.void(types.int64, *args[:3], *args[5:])
+        return types.void(types.int64, types.int64, types.int64, *args[:3], *args[5:])
 
 
 _records = {}
@@ -129,14 +152,21 @@ def _record(name, fields):
     return _records[key]
 
 
-_batches = {}
-
-
 def batch_kernel(layout, block):
     """The compiled loop of ``layout`` over the block function ``block`` (a
     ``"pointer"`` kernel of :attr:`Layout.block_signature`), as a function
     of the loop's arguments but the handle."""
-    return launcher(_loop, f"blocks_{layout.name}", layout.loop_signature, block, layout.block_signature)
+    span = layout.span
+    return launcher(
+        _loop,
+        f"blocks_{layout.name}",
+        layout.loop_signature,
+        block,
+        layout.block_signature,
+        functools.partial(_blocks, span * BLOCK),
+        max(1, BATCH_GRAIN // span),
+        SPAN=span,
+    )
 
 
 def run(layout, kernels, method, flags, arrays, points, out_shape, full):

@@ -24,13 +24,21 @@ full disk whose cache holds the kernels already, they are still read.
 
 The first kernel of a process that is not in the cache prints a line on
 stderr before it compiles (:mod:`proximity._notice`).
+
+While a kernel compiles, Python's cyclic garbage collector is paused
+(:class:`_Paused`): Numba's compiler makes objects by the million, and the
+collector's passes over them, each over every object of the process (a
+mesh library's among them), were a tenth of a first mesh's compile time.
+The garbage of the compile is collected after it.
 """
 
+import gc
 import os
 import tempfile
 import warnings
 
 from numba import njit
+from numba.core import event
 from numba.misc.appdirs import user_cache_dir
 
 from . import _notice
@@ -140,3 +148,36 @@ def _guard_numba_cache(dispatcher):
         return False
     dispatcher._cache = _Guarded(cache, dispatcher.py_func)
     return True
+
+
+class _Paused(event.Listener):
+    """Python's garbage collector paused from the start to the end of the
+    compile of one of the package's kernels (the kernels and Numba's own
+    functions it compiles on the way), then resumed if it was running.
+
+    Numba compiles under a lock, one function at a time, and announces the
+    start and end of each (the end even where the compile raises).
+    """
+
+    def __init__(self):
+        self._depth = 0
+        self._resume = False
+
+    def on_start(self, ev):
+        if self._depth == 0:
+            func = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if not (getattr(func, "__module__", None) or "").startswith(__package__ + "."):
+                return
+            self._resume = gc.isenabled()
+            gc.disable()
+        self._depth += 1
+
+    def on_end(self, ev):
+        if self._depth == 0:
+            return
+        self._depth -= 1
+        if self._depth == 0 and self._resume:
+            gc.enable()
+
+
+event.register("numba:compile", _Paused())

@@ -299,13 +299,14 @@ def _perfect_square(x):
 
 def minus_radius(sqr_bounds, radius):
     """A float within one ulp of ``sqrt(s) - radius``, ``s`` the exact squared
-    distance bounded by ``sqr_bounds(bits) -> (lo2, hi2)`` to ``2^-bits`` of it.
+    distance bounded by ``sqr_bounds(bits) -> (lo2, hi2)`` to ``2^-bits`` of it;
+    ``radius`` a float, or a Fraction (the exact sum of two radii).
 
     The bounds are narrowed until one float is faithful for every value
     they allow; a rational ``sqrt(s)`` (an exact square) gives the value
     itself, correctly rounded.
     """
-    r = Fraction(float(radius))
+    r = radius if isinstance(radius, Fraction) else Fraction(float(radius))
     bits = 64
     while True:
         lo2, hi2 = sqr_bounds(bits)
@@ -536,3 +537,14 @@ def triangle_triangle(a, b):
         *(_float(w) for w in bary_a),
         *(_float(w) for w in bary_b),
     )
+
+
+def pair_sqr_distance(a, b):
+    """The exact squared distance between two segments or triangles (float
+    vertices ``(2 or 3, 3)`` each, a segment first), a Fraction."""
+    (va, vb), unit = _grid(a, b)
+    if len(va) == 2:
+        sqr = _segment_segment(*va, *vb)[0] if len(vb) == 2 else _segment_triangle(*va, vb)[0]
+    else:
+        sqr = _triangle_triangle(va, vb)[0]
+    return sqr * unit * unit

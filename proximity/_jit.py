@@ -20,9 +20,10 @@ Three decorators and three functions, used by every kernel module:
     a specialised kernel compiles only the code of its method.  Nothing is
     compiled before the first call that needs it.
 :func:`launcher`
-    A parallel loop that calls a block function, through the block's
-    address where Numba's internals allow it, so that the loop compiles
-    once for every method and the block is not compiled again inside it.
+    A loop over blocks of queries, run on Python threads, that calls a
+    block function, through the block's address where Numba's internals
+    allow it, so that the loop compiles once for every method and the block
+    is not compiled again inside it.
 
 Where the disk cache is kept, and how it survives damaged files and full
 disks, is :mod:`proximity._cache`.
@@ -40,6 +41,7 @@ from numba.core import cgutils
 from numba.core import types as nb_types
 from numba.extending import intrinsic
 
+from . import _threads
 from ._cache import compiled
 
 _OPTIONS = {"error_model": "numpy"}
@@ -61,9 +63,11 @@ def part(func):
     return njit(**_PART)(func)
 
 
-def kernel(*signature, parallel=False):
+def kernel(*signature, parallel=False, nogil=False):
     """A kernel, cached on disk where possible; compiled at its first call,
-    or at once when a ``signature`` is given.
+    or at once when a ``signature`` is given.  ``nogil``: its calls release
+    the GIL, so that Python threads run it side by side
+    (:func:`proximity._threads.spread`).
 
     Its cached file is named with :func:`_sources_stamp`, as a specialised
     kernel's is: a kernel inlines helpers of other modules, and Numba
@@ -71,7 +75,8 @@ def kernel(*signature, parallel=False):
     """
 
     def decorate(func):
-        return compiled(_stamped(func, func.__globals__), signature, parallel=parallel, **_OPTIONS)
+        options = dict(_OPTIONS, nogil=True) if nogil else _OPTIONS
+        return compiled(_stamped(func, func.__globals__), signature, parallel=parallel, **options)
 
     return decorate
 
@@ -118,7 +123,7 @@ def _sources_stamp():
     return _stamp
 
 
-def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindings):
+def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=False, **bindings):
     """The kernel ``func`` with the global names ``bindings`` bound, compiled
     for ``signature`` (lazily without one).
 
@@ -129,7 +134,8 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
 
     ``tag`` names the specialisation: it is part of the cached kernel's file
     name, so every distinct set of ``bindings`` of one ``func`` needs its own.
-    Repeated calls return the same kernel.
+    Repeated calls return the same kernel.  ``nogil``: a kernel whose calls
+    release the GIL (see :func:`kernel`).
     """
     key = (func, tag)
     kernel_ = _specialised.get(key)
@@ -147,20 +153,23 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", **bindi
             elif role != "kernel":
                 kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:
-                kernel_ = compiled(copy, args, parallel=parallel, **_OPTIONS)
+                options = dict(_OPTIONS, nogil=True) if nogil else _OPTIONS
+                kernel_ = compiled(copy, args, parallel=parallel, **options)
             _specialised[key] = kernel_
     return kernel_
 
 
-# A parallel loop compiles its body into a function of its own, and
-# optimises and compiles it again with every function it calls linked in.
-# A block function called through its address instead is compiled once, on
-# its own, and the loop that calls it compiles once for every method.  The
-# address and the call through it use Numba's private first-class function
-# internals (:func:`_address`, :func:`_at`), which change between Numba
-# releases; where they are missing or differ, the loop calls the block
-# directly, through Numba's public API: the same code, the same bits, at
-# the cost of compiling the block into each loop.
+# A loop over blocks of queries runs on Python threads, each thread a
+# range of blocks (:func:`proximity._threads.spread`): a serial kernel
+# compiles in a fraction of the time a parallel loop (prange) takes, the
+# parfor lowering and its own compiled body left out.  The loop calls the
+# block function through its address, so that it compiles once for every
+# method and the block is not compiled again inside it.  The address and
+# the call through it use Numba's private first-class function internals
+# (:func:`_address`, :func:`_at`), which change between Numba releases;
+# where they are missing or differ, the loop calls the block directly,
+# through Numba's public API: the same code, the same bits, at the cost of
+# compiling the block into each loop.
 
 #: Whether blocks are called through their address; cleared, once per
 #: process, when Numba's private internals do not work as expected, or
@@ -225,37 +234,56 @@ def _entry(kernel_, signature):
     return kernel_.overloads[tuple(signature.args)].entry_point
 
 
-def launcher(loop, tag, signature, block, block_signature):
-    """``loop`` compiled to call ``block``: a function of the loop's arguments but the first.
+#: Ranges of blocks handed out per thread of a loop (:func:`launcher`):
+#: blocks differ in work by orders of magnitude (points near the centre of a
+#: sphere are near every face), so a thread that finishes early takes more.
+RANGES_PER_THREAD = 8
 
-    ``loop`` is a parallel kernel whose first argument is a handle, passed
-    on as the first argument of every ``CALL(handle, ...)`` in its body;
-    ``block`` is a ``"pointer"`` kernel (see :func:`specialize`) of
-    ``block_signature``, which ``CALL`` calls with the other arguments.
-    ``signature`` is the loop's, handle (an int64) first.  ``tag`` names
-    the loop's specialisation, one per block signature.
+
+def launcher(loop, tag, signature, block, block_signature, blocks, grain=1, **bindings):
+    """``loop`` compiled to call ``block``: a function of the loop's arguments but the first three.
+
+    ``loop`` is a kernel whose first arguments are a handle and a range of
+    blocks ``lo, hi``; the handle is passed on as the first argument of
+    every ``CALL(handle, ...)`` in its body, and ``block`` is a
+    ``"pointer"`` kernel (see :func:`specialize`) of ``block_signature``,
+    which ``CALL`` calls with the other arguments.  ``signature`` is the
+    loop's: handle, ``lo`` and ``hi`` (int64) first.  ``tag`` names the
+    loop's specialisation, one per block signature.
 
     Through the block's address where Numba's internals allow it (the loop
     compiles once for every block of a signature), else by a direct call.
     The function returned skips Numba's dispatch: it must be called with
-    arguments of exactly the types of ``signature``.
+    arguments of exactly the types of ``signature``.  It runs the blocks
+    ``0 .. blocks(*args) - 1`` on the threads (:func:`proximity._threads.spread`),
+    in ranges of at least ``grain`` blocks, about :data:`RANGES_PER_THREAD`
+    per thread.  ``bindings`` are bound in ``loop`` too (see :func:`specialize`); they
+    must be the same at every call with one ``tag``.
     """
     global BY_ADDRESS, ADDRESS_ERROR
     key = (loop, tag, block)
     run = _launchers.get(key)
     if run is not None:
         return run
+    entry = None
     if BY_ADDRESS:
         try:
             call = _call_through(_at(block_signature))
-            compiled = specialize(loop, f"{tag}__address", signature, parallel=True, CALL=call)
-            run = functools.partial(_entry(compiled, signature), _address(block, block_signature))
+            compiled = specialize(loop, f"{tag}__address", signature, nogil=True, CALL=call, **bindings)
+            entry = functools.partial(_entry(compiled, signature), _address(block, block_signature))
         except Exception as exc:  # noqa: BLE001  (any failure of the private internals)
             BY_ADDRESS = False
             ADDRESS_ERROR = exc
-    if run is None:
+    if entry is None:
         name = hashlib.blake2b(block.py_func.__qualname__.encode(), digest_size=6).hexdigest()
-        compiled = specialize(loop, f"{tag}__{name}", signature, parallel=True, CALL=_call_direct(block))
-        run = functools.partial(_entry(compiled, signature), 0)
+        call = _call_direct(block)
+        compiled = specialize(loop, f"{tag}__{name}", signature, nogil=True, CALL=call, **bindings)
+        entry = functools.partial(_entry(compiled, signature), 0)
+
+    def run(*args):
+        n = blocks(*args)
+        chunk = max(grain, -(-n // (RANGES_PER_THREAD * _threads.current())))
+        _threads.spread(lambda lo, hi: entry(lo, hi, *args), n, chunk)
+
     _launchers[key] = run
     return run

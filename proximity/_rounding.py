@@ -24,13 +24,7 @@ def certify_difference(e, d, r, exact_rows):
     is less than half the spacing at ``e``, the nearer neighbour's distance
     at most.
     """
-    with np.errstate(invalid="ignore", over="ignore"):
-        back = e - d
-        err = (d - (e - back)) + (-r - back)
-        u = np.where(d == 0, 0.0, np.spacing(d))
-        gap = np.where(e == 0, 2.0**-1074, np.spacing(np.abs(e)) * 0.5)
-        ok = (np.abs(err) + u) * (1.0 + 2.0**-50) < gap
-    bad = np.flatnonzero(~ok.reshape(-1) & np.isfinite(e).reshape(-1))
+    bad = unfaithful(e, d, r)
     if len(bad) == 0:
         return e
     from . import _exact  # in Python: no compiled code
@@ -44,6 +38,18 @@ def certify_difference(e, d, r, exact_rows):
     return e
 
 
+def unfaithful(e, d, r):
+    """The flat rows where ``e = d - r`` is not known to be faithful for
+    ``d* - r`` (see :func:`certify_difference`)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        back = e - d
+        err = (d - (e - back)) + (-r - back)
+        u = np.where(d == 0, 0.0, np.spacing(d))
+        gap = np.where(e == 0, 2.0**-1074, np.spacing(np.abs(e)) * 0.5)
+        ok = (np.abs(err) + u) * (1.0 + 2.0**-50) < gap
+    return np.flatnonzero(~ok.reshape(-1) & np.isfinite(e).reshape(-1))
+
+
 def surface_points(p, c, d, r, rows_of):
     """The nearest point of the rounded surface to each query point ``p``:
     from the core's closest point ``c`` (at distance ``d``) towards ``p`` by
@@ -54,7 +60,13 @@ def surface_points(p, c, d, r, rows_of):
     That point is on the surface, and within ``2 d`` of the nearest one."""
     dim = p.shape[-1]
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        point = c + (p - c) * np.where(r == 0, 0.0, r / d)[..., None]
+        # Along P - c normalised by its own length, not by d: an error of c
+        # across the surface then moves the point by as much, where r / d
+        # times as much would if the two lengths differed by it.
+        v = p - c
+        v = v / np.max(np.abs(v), axis=-1, keepdims=True)
+        v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+        point = np.where((r == 0)[..., None], c, c + v * r[..., None])
         m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
         lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
     rows = np.flatnonzero(lost.reshape(-1))
@@ -66,6 +78,44 @@ def surface_points(p, c, d, r, rows_of):
         radius = np.broadcast_to(r, d.shape).reshape(-1)[rows]
         point.reshape(-1, dim)[rows] = flat_c + (radius * side)[:, None] * u
     return point
+
+
+def spindle_points(point, normal, d, r, circle, result):
+    """``(point, normal)`` with the rows fixed where a circle of radius ``R``
+    rounded by ``r > R`` (a spindle torus) has its nearest surface point on
+    the axis.
+
+    In the circle's meridian plane the point is at ``(radial, height)`` and
+    its nearest circle point at ``(R, 0)``; the surface point ``r`` from it
+    towards the point is at radial ``R + r (radial - R) / d``.  Where that is
+    negative, the ray has crossed the axis (the circle's medial axis) into
+    the balls of the circle's other side, and the nearest point of the
+    surface is the cusp where it meets the axis: ``center + sign(height)
+    sqrt(r^2 - R^2) u`` (``u`` the unit axis), outward normal ``sign(height)
+    u``.  ``circle`` is the core (a :class:`proximity.Circle` batch) and
+    ``result`` its answer.
+    """
+    shape = d.shape
+    big_r = np.broadcast_to(circle.radius, shape)
+    radial = np.broadcast_to(np.asarray(result.radial), shape)
+    height = np.broadcast_to(np.asarray(result.height), shape)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        # r > R holds wherever the rest does, but for the rounding of R - radial.
+        crossed = (r > big_r) & (radial < big_r) & ((r / d) * (big_r - radial) > big_r)
+    if not crossed.any():
+        return point, normal
+    rows = crossed
+    axis = np.broadcast_to(circle.normal, shape + (3,))[rows]
+    axis = axis / np.max(np.abs(axis), axis=-1, keepdims=True)
+    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    side = np.where(height[rows] < 0, -1.0, 1.0)[:, None]
+    ratio = big_r[rows] / r[rows]
+    # sqrt(r^2 - R^2) without squaring r, which underflows or overflows at extreme scales.
+    z = r[rows] * np.sqrt((1.0 - ratio) * (1.0 + ratio))
+    point, normal = np.array(point, copy=True), np.array(normal, copy=True)
+    point[rows] = np.broadcast_to(circle.center, shape + (3,))[rows] + side * z[:, None] * axis
+    normal[rows] = side * axis
+    return point, normal
 
 
 def surface_directions(kinds, params):

@@ -1,7 +1,11 @@
-"""Numba's threading layer: chosen so that forks and Python threads are safe.
+"""Threads: Numba's threading layer, chosen so that forks and Python threads are safe, and Python threads.
 
-Numba runs the batch kernels on one of three threading layers, picked when
-the first parallel kernel is compiled or loaded, once per process:
+The loops over blocks of queries, the hierarchy's build and its fit are
+serial kernels that release the GIL, run side by side on Python threads
+(:func:`spread`): a kernel of parallel loops takes seconds longer to
+compile.  The other parallel kernels (the winding number, validity, ray
+crossings) run on one of Numba's three threading layers, picked when the
+first parallel kernel is compiled or loaded, once per process:
 
 - ``tbb`` is safe under ``fork`` and under concurrent Python threads.  The
   ``tbb`` package from the package index installs its library where the
@@ -159,3 +163,71 @@ def threads(n: int | None = None) -> AbstractContextManager[None]:
         yield n
     finally:
         numba.set_num_threads(previous)
+
+
+# Serial kernels run on Python threads (:func:`spread`): a kernel compiled
+# without ``parallel=True`` compiles in a fraction of the time, and with
+# ``nogil=True`` its calls run side by side.
+_pool = None
+_pool_lock = threading.Lock()
+
+
+def _reset_pool():
+    # A child forked from a process whose pool had started inherits none of its threads.
+    global _pool
+    _pool = None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_reset_pool)
+
+
+def _workers():
+    global _pool
+    if _pool is None:
+        with _pool_lock:
+            if _pool is None:
+                from concurrent.futures import ThreadPoolExecutor
+
+                _pool = ThreadPoolExecutor(max(default_threads() - 1, 1), thread_name_prefix="proximity")
+    return _pool
+
+
+def current():
+    """The number of threads batch queries of this Python thread run on (see :func:`threads`)."""
+    return _lazy.load("numba").get_num_threads()
+
+
+def spread(run, tasks, chunk=1):
+    """``run(lo, hi)`` over the tasks ``0 .. tasks - 1``, ``chunk`` at a time,
+    on as many threads as batch queries use (see :func:`threads`).
+
+    ``run`` calls a kernel compiled with ``nogil=True`` on its range of
+    tasks, which must write nothing another range reads.  Ranges are
+    handed out one at a time (tasks may differ in size by orders of
+    magnitude); the calling thread takes its share.  Runs on the calling
+    thread alone where there is a single range or a single thread.
+    """
+    ranges = [(lo, min(lo + chunk, tasks)) for lo in range(0, tasks, chunk)]
+    n = min(len(ranges), current())
+    if n <= 1:
+        for lo, hi in ranges:
+            run(lo, hi)
+        return
+    queue = iter(ranges)
+    lock = threading.Lock()
+
+    def work():
+        while True:
+            with lock:
+                job = next(queue, None)
+            if job is None:
+                return
+            run(*job)
+
+    futures = [_workers().submit(work) for _ in range(n - 1)]
+    try:
+        work()
+    finally:
+        for future in futures:
+            future.result()

@@ -10,6 +10,17 @@ from the core's closest point towards the point (or, from a point on the
 core, along the core's normal).  The feature and the other fields are
 the core's: they name where on the core the nearest point lies.
 
+Inside a solid whose core is not convex (a circle, a mesh, a scene), the
+balls around distant parts of the core overlap, and ``d - r`` is a lower
+bound on the depth (the distance to the surface), which it equals where
+the nearest core point's ball holds the nearest surface point.  The
+closest point of a circle rounded by more than its radius (a spindle
+torus) is exact: where the path from the nearest circle point crosses the
+axis, it is the cusp where the surface meets the axis.  For meshes and
+scenes, the point reached from the nearest core point may lie inside the
+solid, where another part of the core is within ``r`` of it.  Outside the
+solid (``d >= r``) the answers are the solid's own, to the bounds below.
+
 Accuracy.  ``robust``: the core's distance is within ``8 eps S_core`` of
 the exact one and ``d - r`` rounds once more, by at most ``eps/2 (S_core
 + r)``; the bound is stated as ``8 eps S + 2^-1075`` with ``S = S_core +
@@ -27,11 +38,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import primitives
-from ._rounding import certify_difference, outward, surface_points
+from ._rounding import certify_difference, outward, spindle_points, surface_points
 from ._typing import ArrayLike, Bools, Distances, Floats, Transform
 from ._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
 from .results import asdict, beyond, format_repr
-from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
+from .shapes import DEFAULT_METHOD, Circle, Frozen, check_method, keyword_only
 
 if TYPE_CHECKING:
     from .posed import Posed
@@ -237,14 +248,16 @@ class Inflated(Frozen):
         r = np.broadcast_to(self.radius, shape)
         rows_of = lambda rows: _primitive_arrays(self._exact_rows(core, points, shape, rows))  # noqa: E731
         point = surface_points(p, c, d, r, rows_of)
+        # Its normals: the rounded surface's, outwards (along P - point where P is outside).
+        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape))
+        if isinstance(self.core, Circle):
+            point, normal = spindle_points(point, normal, d, r, self.core, core)
         distance = np.maximum(e, 0.0) + 0.0
         fields = {name: np.broadcast_to(value, shape + np.shape(value)[np.ndim(core.distance) :])
                   for name, value in asdict(core).items()}  # fmt: skip
         with np.errstate(over="ignore", under="ignore"):
             fields.update(distance=distance, sqr_distance=distance * distance, point=point)
         result = type(core)(**fields)
-        # Its normals: the rounded surface's, outwards (along P - point where P is outside).
-        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape))
         result.__dict__["_normal"] = freeze_result(np.array(normal))
         if limit < np.inf:
             far = np.asarray(result.distance) > limit

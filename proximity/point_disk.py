@@ -247,6 +247,12 @@ def certified_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py,
     return certified_round(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz)
 
 
+# Blocks per call of a block function (see :attr:`proximity._batch.Layout.span`).
+# A distance to one disk costs a few nanoseconds, and a call of the block
+# function about as much as ten of them; eight blocks a call make that a
+# percent or two.
+SPAN = 8
+
 # Bound per method by :func:`proximity._jit.specialize`: the query of one
 # point, whether the block function runs the robust method's SIMD loop
 # first, and whether the method has an exact fallback.
@@ -316,11 +322,18 @@ def _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def _keep(sinks, oks, q, res, ok, full):
+def _keep(sinks, oks, q, res, ok, full, lean):
     """Query ``q``'s results into ``sinks`` (the distance alone unless
-    ``full``) and whether they hold into ``oks``; 1 where they do not."""
+    ``full``) and, after a complete pass (not ``lean``), whether they hold
+    into ``oks``; 1 where they do not.
+
+    A lean pass that leaves a query is followed by a complete pass over the
+    whole block, which writes every flag again, so the lean pass keeps only
+    the count.
+    """
     put_round(sinks, q, res, full)
-    oks[q] = ok
+    if not lean:
+        oks[q] = ok
     return not ok
 
 
@@ -334,7 +347,7 @@ def _pairs_loop(sinks, oks, c, u, p, r, is_disk, full, lean):
         cx, cy, cz, ux, uy, uz = c[3 * q], c[3 * q + 1], c[3 * q + 2], u[3 * q], u[3 * q + 1], u[3 * q + 2]
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, r[q], px, py, pz)
-        left += _keep(sinks, oks, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
     return left
 
 
@@ -349,7 +362,9 @@ def _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, lean):
 
 
 def _block(shape, P, n_j, k0, nb, out, exact, full):
-    """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`).
+    """Queries ``k0 .. k0 + nb`` of a batch (see :mod:`proximity._batch`),
+    a block of :data:`~proximity._loops.BLOCK` at a time (the loop gives
+    :data:`SPAN` blocks per call).
 
     The shapes' arrays and the points are read in place where they can be
     (see :func:`~proximity._loops.block_vectors`), and the results written
@@ -360,38 +375,40 @@ def _block(shape, P, n_j, k0, nb, out, exact, full):
     """
     shape, P, out, exact = borrowed(shape), borrowed(P), borrowed(out), borrowed(exact)
     is_disk, C, U, N, R = shape
-    copies = scratch(ROUND_ROWS, np.float64)
-    c = block_vectors(copies, ROUND_C, C, n_j, k0, nb)
-    u = block_vectors(copies, ROUND_U, U, n_j, k0, nb)
-    p = block_vectors(copies, ROUND_P, P, n_j, k0, nb)
-    r = block_scalars(copies, ROUND_R, R, n_j, k0, nb)
-    results = scratch(8, np.float64)
+    copies, results = scratch(ROUND_ROWS, np.float64), scratch(8, np.float64)
+    codes, flags = scratch(1, np.int8), scratch(1, np.bool_)
     oks = results[7]
-    sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
-    left = nb
-    if SIMD:
-        left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, True)
+    for b0 in range(k0, k0 + nb, BLOCK):
+        bn = min(BLOCK, k0 + nb - b0)
+        c = block_vectors(copies, ROUND_C, C, n_j, b0, bn)
+        u = block_vectors(copies, ROUND_U, U, n_j, b0, bn)
+        p = block_vectors(copies, ROUND_P, P, n_j, b0, bn)
+        r = block_scalars(copies, ROUND_R, R, n_j, b0, bn)
+        sinks = round_sinks(out, b0, bn, full, results, codes, flags)
+        left = bn
+        if SIMD:
+            left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, True)
+            if left:
+                left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, False)
+        else:
+            for q in range(bn):
+                oks[q] = 0.0
         if left:
-            left = _pairs_pass(sinks, oks, c, u, p, r, is_disk, full, False)
-    else:
-        for q in range(nb):
-            oks[q] = 0.0
-    if left:
-        for q in range(nb):
-            if oks[q] != 0.0:
-                continue
-            k = k0 + q
-            i = k // n_j
-            j = k - i * n_j
-            cx, cy, cz = c[3 * q], c[3 * q + 1], c[3 * q + 2]
-            ux, uy, uz = u[3 * q], u[3 * q + 1], u[3 * q + 2]
-            px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
-            nx, ny, nz = N[i, j, 0], N[i, j, 1], N[i, j, 2]
-            cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, r[q], px, py, pz)
-            if EXACT_FALLBACK:
-                exact[k] = cert[0] != certified.CERTAIN
-            put_round(sinks, q, cert[1:], full)
-    drain_round(sinks, out, k0, nb, full)
+            for q in range(bn):
+                if oks[q] != 0.0:
+                    continue
+                k = b0 + q
+                i = k // n_j
+                j = k - i * n_j
+                cx, cy, cz = c[3 * q], c[3 * q + 1], c[3 * q + 2]
+                ux, uy, uz = u[3 * q], u[3 * q + 1], u[3 * q + 2]
+                px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+                nx, ny, nz = N[i, j, 0], N[i, j, 1], N[i, j, 2]
+                cert = QUERY(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, r[q], px, py, pz)
+                if EXACT_FALLBACK:
+                    exact[k] = cert[0] != certified.CERTAIN
+                put_round(sinks, q, cert[1:], full)
+        drain_round(sinks, out, b0, bn, full)
 
 
 @inline
@@ -403,7 +420,7 @@ def _one_loop(sinks, oks, p, is_disk, full, lean, cx, cy, cz, ux, uy, uz, radius
     for q in range(BLOCK):
         px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
         res, ok = _robust_row(is_disk, lean, cx, cy, cz, ux, uy, uz, radius, px, py, pz)
-        left += _keep(sinks, oks, q, res, ok, full)
+        left += _keep(sinks, oks, q, res, ok, full, lean)
     return left
 
 
@@ -429,28 +446,30 @@ def _robust_block_one(shape, P, n_j, k0, nb, out, exact, full):
 
     Only the points are read.  The loop reads the shape as scalars, so the
     compiler computes its own terms (such as the rim direction used on the
-    axis) once per block instead of once per query.
+    axis) once per call instead of once per query.
     """
     shape, P, out = borrowed(shape), borrowed(P), borrowed(out)
     is_disk, C, U, _, R = shape
-    copies = scratch(3, np.float64)
-    p = block_vectors(copies, 0, P, n_j, k0, nb)
-    results = scratch(8, np.float64)
-    oks = results[7]
-    sinks = round_sinks(out, k0, nb, full, results, scratch(1, np.int8), scratch(1, np.bool_))
     cx, cy, cz, ux, uy, uz = C[0, 0, 0], C[0, 0, 1], C[0, 0, 2], U[0, 0, 0], U[0, 0, 1], U[0, 0, 2]
     radius = R[0, 0]
-    left = _one_pass(sinks, oks, p, is_disk, full, True, cx, cy, cz, ux, uy, uz, radius)
-    if left:
-        left = _one_pass(sinks, oks, p, is_disk, full, False, cx, cy, cz, ux, uy, uz, radius)
-    if left:
-        for q in range(nb):
-            if oks[q] == 0.0:
-                px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
-                # The robust method reads the unit normal only; it stands in for the normal as given.
-                res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
-                put_round(sinks, q, res[1:], full)
-    drain_round(sinks, out, k0, nb, full)
+    copies, results = scratch(3, np.float64), scratch(8, np.float64)
+    codes, flags = scratch(1, np.int8), scratch(1, np.bool_)
+    oks = results[7]
+    for b0 in range(k0, k0 + nb, BLOCK):
+        bn = min(BLOCK, k0 + nb - b0)
+        p = block_vectors(copies, 0, P, n_j, b0, bn)
+        sinks = round_sinks(out, b0, bn, full, results, codes, flags)
+        left = _one_pass(sinks, oks, p, is_disk, full, True, cx, cy, cz, ux, uy, uz, radius)
+        if left:
+            left = _one_pass(sinks, oks, p, is_disk, full, False, cx, cy, cz, ux, uy, uz, radius)
+        if left:
+            for q in range(bn):
+                if oks[q] == 0.0:
+                    px, py, pz = p[3 * q], p[3 * q + 1], p[3 * q + 2]
+                    # The robust method reads the unit normal only; it stands in for the normal as given.
+                    res = robust_query(is_disk, cx, cy, cz, ux, uy, uz, ux, uy, uz, radius, px, py, pz)
+                    put_round(sinks, q, res[1:], full)
+        drain_round(sinks, out, b0, bn, full)
 
 
 # Per method: the query of one point, whether it has a SIMD loop (robust),
@@ -476,6 +495,7 @@ LAYOUT = Layout(
     flags=("is_disk",),
     arrays=(("center", 1), ("unit_normal", 1), ("normal", 1), ("radius", 0)),
     extra=(("equidistant", np.bool_, 1), ("height", np.float64, 1), ("radial", np.float64, 1)),
+    span=SPAN,
 )
 
 

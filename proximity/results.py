@@ -484,6 +484,123 @@ def circle_from_row(row):
     return result
 
 
+@dataclass(frozen=True, repr=False)
+class PairResult:
+    """Closest points of two shapes: :func:`proximity.closest_points`.
+
+    Every field has the broadcast batch shape of the two shapes (NumPy
+    scalars for two single shapes); a field that does not apply to a side
+    is NaN (or -1 for indices).
+
+    Attributes
+    ----------
+    distance : ndarray of float64, shape ``batch``
+        Distance between the shapes (0 where they touch or overlap).
+    sqr_distance : ndarray of float64, shape ``batch``
+        Its square.
+    point_a, point_b : ndarray of float64, shape ``batch + (D,)``
+        A closest point on each shape, ``distance`` apart; one common point
+        where the shapes touch or overlap.  On rounded shapes, the points
+        of their surfaces along the cores' witness direction.
+    feature_a, feature_b : ndarray of int8, shape ``batch``
+        :class:`Feature` codes of the features holding them (the cores' for
+        rounded shapes; of the face or primitive for meshes and scenes).
+    parameter_a, parameter_b : ndarray of float64, shape ``batch``
+        Where a side is a segment: ``t`` with ``point = V0 + t (V1 - V0)``.
+    barycentric_a, barycentric_b : ndarray of float64, shape ``batch + (3,)``
+        Where a side is a triangle or a mesh: the witness's weights over the
+        vertices of its triangle (face).
+    face_a, face_b : ndarray of int64, shape ``batch``
+        Where a side is a mesh: the index of the face holding the witness.
+    primitive_a, primitive_b, source_a, source_b : ndarray of int64, shape ``batch``
+        Where a side is a scene: the index of the primitive holding the
+        witness, and of the shape it came from (see :class:`proximity.SceneResult`).
+
+    Examples
+    --------
+    >>> import proximity
+    >>> a = proximity.Segment([[0, 0, 0], [4, 0, 0]])
+    >>> b = proximity.Segment([[1, -1, 2], [1, 1, 2]])
+    >>> r = proximity.closest_points(a, b)
+    >>> float(r.distance), r.point_a.tolist(), r.point_b.tolist()
+    (2.0, [1.0, 0.0, 0.0], [1.0, 0.0, 2.0])
+    >>> str(r.feature_name_a), float(r.parameter_a), float(r.parameter_b)
+    ('EDGE01', 0.25, 0.5)
+    """
+
+    distance: np.ndarray
+    sqr_distance: np.ndarray
+    point_a: np.ndarray
+    point_b: np.ndarray
+    feature_a: np.ndarray
+    feature_b: np.ndarray
+    parameter_a: np.ndarray
+    parameter_b: np.ndarray
+    barycentric_a: np.ndarray
+    barycentric_b: np.ndarray
+    face_a: np.ndarray
+    face_b: np.ndarray
+    primitive_a: np.ndarray
+    primitive_b: np.ndarray
+    source_a: np.ndarray
+    source_b: np.ndarray
+
+    def __post_init__(self):
+        for name, value in vars(self).items():
+            value = _frozen(value)
+            if name.startswith("feature") and not isinstance(value, np.ndarray):
+                value = np.int8(value)
+            object.__setattr__(self, name, value)
+
+    def __setstate__(self, state):
+        self.__dict__.update(freeze_fields(state))
+
+    def __repr__(self):
+        return format_repr(self, [f.name for f in fields(self)])
+
+    @property
+    def feature_name_a(self):
+        """The :class:`Feature` names of ``feature_a`` (a str for one pair)."""
+        return Feature.names(self.feature_a)
+
+    @property
+    def feature_name_b(self):
+        """The :class:`Feature` names of ``feature_b`` (a str for one pair)."""
+        return Feature.names(self.feature_b)
+
+    def swapped(self):
+        """The same answer with the sides exchanged: ``a`` becomes ``b``.
+
+        Examples
+        --------
+        >>> import proximity
+        >>> r = proximity.closest_points(proximity.Point([0, 0, 1]), proximity.Point([0, 0, 3]))
+        >>> r.swapped().point_a.tolist()
+        [0.0, 0.0, 3.0]
+        """
+        values = {}
+        for name, value in vars(self).items():
+            if name.endswith("_a"):
+                name = name[:-2] + "_b"
+            elif name.endswith("_b"):
+                name = name[:-2] + "_a"
+            values[name] = value
+        return _new_pair(values)
+
+    def __getitem__(self, index):
+        """The results of the pairs at ``index`` of the batch."""
+        if np.ndim(self.distance) == 0:
+            raise IndexError("a single pair's result has no batch to index")
+        return PairResult(**{name: value[index] for name, value in vars(self).items()})
+
+
+def _new_pair(values):
+    """A :class:`PairResult` of fields already frozen (no conversions)."""
+    result = _new(PairResult)
+    result.__dict__.update(values)
+    return result
+
+
 def beyond(answer, limit):
     """``answer`` (a result, or an array of distances) with the rows farther
     than ``limit`` set as a cutoff sets them: distance and squared distance

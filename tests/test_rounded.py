@@ -9,6 +9,7 @@ where the subtraction cancels), closest points on the rounded surface.
 """
 
 import math
+import zlib
 
 import mpmath
 import numpy as np
@@ -88,7 +89,8 @@ def _check_rounded(kind, args, radius, point, method, result, signed):
     ids=["unit", "tiny", "huge", "far"],
 )
 def test_rounded_solids_against_the_exact_reference(kind, method, scale, offset):
-    rng = np.random.default_rng(hash((kind, method, scale)) % 2**32)
+    # A seed of its own per case, the same in every run (hash() of a string is not).
+    rng = np.random.default_rng(zlib.crc32(repr((kind, method, scale)).encode()))
     n = 40
     core, args = _cores(kind, rng, n, scale, offset)
     radius = rng.random(n) * 2 * scale
@@ -134,6 +136,47 @@ def test_points_on_the_core_reach_the_surface_along_its_normal(method):
         assert float(r.distance) == 0.0
         assert math.isclose(float(np.linalg.norm(np.asarray(r.point) - p)), -depth, rel_tol=1e-15)
         assert float(solid.core.distance(r.point)) == pytest.approx(-depth, rel=1e-15)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-200, 1e200])
+def test_a_point_near_the_core_reaches_the_surface_by_the_radius(scale):
+    # The surface point follows P - c normalised by its own length: an error
+    # of c across the plane (a few ulps of the coordinates) moves the point by
+    # as much, not by r / d times as much.
+    disk = proximity.Disk(np.array([3.0, -2.0, 1.0]) * scale, [1, 2, 2], 1.5 * scale)
+    solid = disk.inflated(4.0 * scale)
+    rng = np.random.default_rng(8)
+    on = disk.closest_point(rng.normal(size=(200, 3)) * scale + disk.center).point
+    points = on + np.array([1, 2, 2]) / 3 * 1e-3 * 4.0 * scale * rng.choice([-1, 1], size=(200, 1))
+    for method in METHODS:
+        r = solid.closest_point(points, method=method)
+        for k in range(len(points)):
+            d_core, s_core = _exact_core("disk", (disk.center, disk.normal, disk.radius), r.point[k])
+            allowed = 8 * EPS * (s_core + 4.0 * scale) + checks.point_slack(r.point[k]) * 4
+            assert abs(d_core - exact.to_mpf(4.0 * scale)) <= allowed, (k, method)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_spindle_torus_sends_points_near_the_axis_to_its_cusps(method):
+    # A circle of radius 1 rounded by 2: the balls of opposite sides overlap
+    # across the axis, whose surface meets it at the cusps (0, 0, +-sqrt(3)).
+    # From a point near the axis the path away from the nearest circle point
+    # crosses the axis; the nearest surface point is the cusp on its side.
+    spindle = proximity.Circle([0, 0, 0], [0, 0, 1], 1.0).inflated(2.0)
+    points = np.array([[0.1, 0.0, 0.2], [0.0, -0.05, -0.5], [0.8, 0.0, 0.1], [1.5, 0.0, 0.1]])
+    r = spindle.closest_point(points, method=method)
+    cusp = math.sqrt(3.0)
+    np.testing.assert_allclose(r.point[0], [0, 0, cusp], atol=4e-16)
+    np.testing.assert_allclose(r.point[1], [0, 0, -cusp], atol=4e-16)
+    np.testing.assert_allclose(r.normal[:2], [[0, 0, 1], [0, 0, -1]])
+    # From (0.8, 0, 0.1) too: 2 from (1, 0, 0) along (-0.2, 0, 0.1) is past the axis.
+    np.testing.assert_allclose(r.point[2], [0, 0, cusp], atol=4e-16)
+    # Outside the circle, the surface point 2 from the nearest circle point.
+    length = math.hypot(0.5, 0.1)
+    np.testing.assert_allclose(r.point[3], [1 + 2 * 0.5 / length, 0, 2 * 0.1 / length])
+    # Every one on the surface: 2 from the circle.
+    np.testing.assert_allclose(spindle.core.distance(r.point), 2.0, rtol=1e-15)
+    assert (np.asarray(r.distance) == 0).all()
 
 
 def test_named_forms_are_their_cores_inflated():

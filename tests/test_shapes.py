@@ -104,6 +104,40 @@ def test_one_circle_or_disk_takes_the_same_bits_as_pairs(family, cls, method):
         np.testing.assert_array_equal(getattr(one, name), value, err_msg=name)
 
 
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("cls", [Circle, Disk])
+@pytest.mark.parametrize("one", [True, False], ids=["one", "pairs"])
+def test_circle_and_disk_batches_over_many_calls_take_the_bits_of_single_queries(cls, one, method):
+    """A call of a disk or circle block function works through several
+    blocks: over an ``(I, J)`` loop whose rows are no multiple of a block,
+    longer than a call's span, every query has the bits of its own
+    single-point query, for the distance alone and the full answer."""
+    rng = np.random.default_rng(13)
+    scene = scenes.disk_well_conditioned(rng, 300)
+    n_j = 2 * 8 * 128 + 77  # more than one call's blocks, the last block short
+    if one:
+        # Every other point: strides that do not merge, so the loop keeps two dimensions.
+        shape = cls(scene.center[0], scene.normal[0], scene.radius[0])
+        points = _points_against(scene.center[0], scene.points, rng)
+        points = np.resize(points, (2, 2 * n_j, 3))[:, ::2]
+        singles = [shape] * 2
+    else:
+        shape = cls(scene.center[:2, None], scene.normal[:2, None], scene.radius[:2, None])
+        points = _points_against(scene.center[0], scene.points, rng)
+        points = np.resize(points, (1, n_j, 3))
+        singles = [cls(scene.center[i], scene.normal[i], scene.radius[i]) for i in range(2)]
+    full = shape.closest_point(points, method=method)
+    distance = shape.distance(points, method=method)
+    assert distance.shape == full.distance.shape == (2, n_j)
+    for i in range(2):
+        for j in range(n_j):
+            point = points[i if one else 0, j]
+            single = singles[i].closest_point(point, method=method)
+            np.testing.assert_array_equal(distance[i, j], single.distance)
+            for name, value in asdict(single).items():
+                np.testing.assert_array_equal(getattr(full, name)[i, j], value, err_msg=name)
+
+
 # From this many circles or disks on, a compiled loop checks the arrays and
 # computes the unit normals; it must raise the same errors and give the same bits.
 LARGE = shapes_module._COMPILED_UNIT

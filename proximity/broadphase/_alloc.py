@@ -34,6 +34,11 @@ def empty(rows, columns):
     return _empty(rows, columns)
 
 
+def empty_ints(n):
+    """An uninitialised int64 array of ``n``, from :func:`empty` (large ones from Numba's allocator)."""
+    return empty(1, n).view(np.int64)[0]
+
+
 @kernel(parallel=True)
 def _take_rows(source, rows, out):
     for m in prange(rows.shape[0]):

@@ -17,11 +17,10 @@ index order (:func:`brute`).  Exact copies of a primitive are not stored
 import math
 
 import numpy as np
-from numba import prange
 
-from .. import primitives
+from .. import _threads, primitives
 from .._jit import inline, kernel
-from ._alloc import GATHER_MIN, empty, readonly, take_rows
+from ._alloc import GATHER_MIN, empty, empty_ints, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
@@ -181,24 +180,6 @@ def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size)
 
 
 @inline
-def _subtree_task(i, child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size):
-    """:func:`_split_subtree` for node ``i`` of the level-by-level split, in
-    the block of nodes at twice its first row, with scratch bounds."""
-    base = 2 * child[i]
-    scratch_min = np.empty((2 * BUILD_SUBTREE, 3))
-    scratch_max = np.empty((2 * BUILD_SUBTREE, 3))
-    bins = np.empty((BINS, 9))
-    block_child[base] = child[i]
-    block_count[base] = count[i]
-    for a in range(3):
-        scratch_min[0, a] = cmin[i, a]
-        scratch_max[0, a] = cmax[i, a]
-    return _split_subtree(
-        base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size
-    )
-
-
-@inline
 def _number_block(i, nodes, offset, child, block_child, block_count, out_child, out_count):
     """Copy node ``i``'s block of ``nodes`` nodes into the tree: block node
     ``base + t`` is node ``offset + t - 1``, and the root keeps its number."""
@@ -213,7 +194,60 @@ def _number_block(i, nodes, offset, child, block_child, block_count, out_child, 
             out_count[k] = block_count[base + t]
 
 
-@kernel(parallel=True)
+#: The steps of :func:`_build_step`.
+_ROOT, _LEVEL, _SUBTREES, _NUMBER = 0, 1, 2, 3
+
+
+@kernel(nogil=True)
+def _build_step(
+    step, lo, hi, nodes, firsts, rows, order, child, count, cmin, cmax,
+    block_child, block_count, leaf_size, made, below, out_child, out_count,
+):  # fmt: skip
+    """One step of :func:`_build`, on the tasks ``lo .. hi - 1``; one kernel
+    for every step, so that a first build compiles one.
+
+    ``_ROOT``: the rows' order and the root's centroid bounds.  ``_LEVEL``:
+    :func:`_split` of the nodes ``nodes[lo:hi]`` into the nodes at
+    ``firsts[lo:hi]``.  ``_SUBTREES``: :func:`_split_subtree` of each node
+    ``nodes[lo:hi]``, in the block of nodes at twice its first row, with
+    scratch bounds; its number of nodes and depth to ``made`` and
+    ``below``.  ``_NUMBER``: the blocks of those nodes copied into the
+    tree, from the nodes ``firsts[lo:hi]`` on (:func:`_number_block`).
+    """
+    if step == _ROOT:
+        for j in range(order.shape[0]):
+            order[j] = j
+        for a in range(3):
+            cmin[0, a] = math.inf
+            cmax[0, a] = -math.inf
+        for j in range(rows.shape[0]):
+            for a in range(3):
+                cmin[0, a] = min(cmin[0, a], _centroid(rows, j, a))
+                cmax[0, a] = max(cmax[0, a], _centroid(rows, j, a))
+    elif step == _LEVEL:
+        bins = np.empty((BINS, 9))
+        for t in range(lo, hi):
+            _split(nodes[t], firsts[t], child, count, rows, order, cmin, cmax, np.int64(0), bins)
+    elif step == _SUBTREES:
+        scratch_min = np.empty((2 * BUILD_SUBTREE, 3))
+        scratch_max = np.empty((2 * BUILD_SUBTREE, 3))
+        bins = np.empty((BINS, 9))
+        for r in range(lo, hi):
+            i = nodes[r]
+            base = 2 * child[i]
+            block_child[base] = child[i]
+            block_count[base] = count[i]
+            for a in range(3):
+                scratch_min[0, a] = cmin[i, a]
+                scratch_max[0, a] = cmax[i, a]
+            made[r], below[r] = _split_subtree(
+                base, block_child, block_count, rows, order, scratch_min, scratch_max, bins, leaf_size
+            )
+    else:
+        for r in range(lo, hi):
+            _number_block(nodes[r], made[r], firsts[r], child, block_child, block_count, out_child, out_count)
+
+
 def _build(rows, leaf_size):
     """Topology of a hierarchy over the boxes ``rows[:, 0:3]`` (low corners)
     and ``rows[:, 3:6]`` (high corners), n >= 1 rows, whose rows it puts in
@@ -224,94 +258,80 @@ def _build(rows, leaf_size):
     largest depth of a leaf.
 
     Binned SAH.  Nodes over more than :data:`BUILD_SUBTREE` primitives (and
-    more than ``leaf_size``) are split one level of the tree at a time, the nodes of a level in
-    parallel, each on its own contiguous rows, and numbered breadth first.
-    Each smaller node is then split down to its leaves as one task, in a
-    scratch block of nodes that its rows index (a node over rows ``s .. s +
-    c - 1`` has at most ``2 c - 1`` nodes in its subtree, so the block at
-    ``2 s`` is its own).  Its descendants are then numbered after the large
-    nodes, block after block: a node's children are adjacent and come after
-    it.
+    more than ``leaf_size``) are split one level of the tree at a time, the
+    nodes of a level side by side, each on its own contiguous rows, and
+    numbered breadth first.  Each smaller node is then split down to its
+    leaves as one task, in a scratch block of nodes that its rows index (a
+    node over rows ``s .. s + c - 1`` has at most ``2 c - 1`` nodes in its
+    subtree, so the block at ``2 s`` is its own).  Its descendants are then
+    numbered after the large nodes, block after block: a node's children
+    are adjacent and come after it.
+
+    The steps are one serial kernel (:func:`_build_step`), run side by side
+    on Python threads (:func:`proximity._threads.spread`): a kernel of
+    parallel loops takes seconds longer to compile, at the first build on
+    a machine.
     """
+    leaf_size = np.int64(leaf_size)
     n = rows.shape[0]
     cap = 2 * n - 1
-    # Every entry is written before it is read (np.zeros or np.arange
-    # would each be a parallel loop of its own to compile).
-    child = np.empty(cap, np.int64)
-    count = np.empty(cap, np.int64)
-    first_child = np.empty(cap, np.int64)
-    cmin = np.empty((cap, 3))
-    cmax = np.empty((cap, 3))
-    order = np.empty(n, np.int64)
-    for j in range(n):
-        order[j] = j
+    # Every entry is written before it is read.
+    child, count, order = empty_ints(cap), empty_ints(cap), empty_ints(n)
+    cmin, cmax = empty(cap, 3), empty(cap, 3)
+    none = np.empty(0, np.int64)
+
+    def run(step, nodes, firsts, lo, hi, blocks=(none, none), made=none, below=none, out=(none, none)):
+        _build_step(
+            step, lo, hi, nodes, firsts, rows, order, child, count, cmin, cmax,
+            *blocks, leaf_size, made, below, *out,
+        )  # fmt: skip
+
+    run(_ROOT, none, none, 0, 0)
     child[0] = 0
-    for a in range(3):
-        cmin[0, a] = math.inf
-        cmax[0, a] = -math.inf
-    for j in range(n):
-        for a in range(3):
-            cmin[0, a] = min(cmin[0, a], _centroid(rows, j, a))
-            cmax[0, a] = max(cmax[0, a], _centroid(rows, j, a))
     count[0] = n
     large = max(leaf_size, BUILD_SUBTREE)
     n_nodes = 1
     begin = 0
     while begin < n_nodes:
-        end_level = n_nodes
-        for i in range(begin, end_level):
-            if count[i] > large:
-                first_child[i] = n_nodes
-                n_nodes += 2
-        # In chunks of nodes, each with its own work array for the bins.
-        size = max((end_level - begin) // 16, 1)
-        for chunk in prange((end_level - begin + size - 1) // size):
-            bins = np.empty((BINS, 9))
-            for i in range(begin + chunk * size, min(begin + (chunk + 1) * size, end_level)):
-                if count[i] > large:
-                    _split(i, first_child[i], child, count, rows, order, cmin, cmax, np.int64(0), bins)
-        begin = end_level
-    # The depth of each of those nodes (set from its parent's: an array
-    # filled by NumPy here would be a parallel loop that Numba may fuse
-    # with a later one of the same length), and the ones left to split.
-    level = np.empty(n_nodes, np.int64)
-    level[0] = 0
-    roots = np.empty(n_nodes, np.int64)
-    n_roots = 0
-    deepest = 0
-    for k in range(n_nodes):
-        if count[k] == 0:
-            level[child[k]] = level[k] + 1
-            level[child[k] + 1] = level[k] + 1
-        elif count[k] > leaf_size:
-            roots[n_roots] = k
-            n_roots += 1
-        else:
-            deepest = max(deepest, level[k])
-    block_child = np.empty(2 * n, np.int64)
-    block_count = np.empty(2 * n, np.int64)
-    nodes = np.empty(n_roots, np.int64)
-    below = np.empty(n_roots, np.int64)
-    for r in prange(n_roots):
-        made, levels = _subtree_task(
-            roots[r], child, count, cmin, cmax, block_child, block_count, rows, order, leaf_size
+        nodes = begin + np.flatnonzero(count[begin:n_nodes] > large)
+        firsts = n_nodes + 2 * np.arange(len(nodes), dtype=np.int64)
+        begin, n_nodes = n_nodes, n_nodes + 2 * len(nodes)
+        _threads.spread(
+            lambda lo, hi, nodes=nodes, firsts=firsts: run(_LEVEL, nodes, firsts, lo, hi), len(nodes)
         )
-        nodes[r] = made
-        below[r] = levels
-    total = n_nodes
-    offset = np.empty(n_roots, np.int64)
-    for r in range(n_roots):
-        offset[r] = total
-        total += nodes[r] - 1
-        deepest = max(deepest, level[roots[r]] + below[r])
-    out_child = np.empty(total, np.int64)
-    out_count = np.empty(total, np.int64)
-    for k in range(n_nodes):
-        out_child[k] = child[k]
-        out_count[k] = count[k]
-    for r in prange(n_roots):
-        _number_block(roots[r], nodes[r], offset[r], child, block_child, block_count, out_child, out_count)
-    return out_child, out_count, order, deepest
+    # The depth of each of those nodes (a node comes before its children),
+    # and the ones left to split.
+    top_child, top_count = child[:n_nodes], count[:n_nodes]
+    level = np.zeros(n_nodes, np.int64)
+    for k in np.flatnonzero(top_count == 0).tolist():
+        level[top_child[k]] = level[top_child[k] + 1] = level[k] + 1
+    roots = np.flatnonzero(top_count > leaf_size)
+    deepest = int(np.max(level[(top_count > 0) & (top_count <= leaf_size)], initial=0))
+    blocks = (empty_ints(2 * n), empty_ints(2 * n))
+    made = np.empty(len(roots), np.int64)
+    below = np.empty(len(roots), np.int64)
+    _threads.spread(
+        lambda lo, hi: run(_SUBTREES, roots, none, lo, hi, blocks, made, below), len(roots), _SUBTREE_CHUNK
+    )
+    # Each subtree's nodes but its root after the large nodes, block after block.
+    offset = n_nodes + np.cumsum(made - 1) - (made - 1)
+    total = n_nodes + int(np.sum(made - 1))
+    if len(roots):
+        deepest = max(deepest, int(np.max(level[roots] + below)))
+    out = (empty_ints(total), empty_ints(total))
+    out[0][:n_nodes] = top_child
+    out[1][:n_nodes] = top_count
+    _threads.spread(
+        lambda lo, hi: run(_NUMBER, roots, offset, lo, hi, blocks, made, below, out),
+        len(roots),
+        _NUMBER_CHUNK,
+    )
+    return out[0], out[1], order, deepest
+
+
+#: Subtrees split, and numbered, per call of the kernel: each is over a few thousand primitives at most.
+_SUBTREE_CHUNK = 4
+_NUMBER_CHUNK = 64
 
 
 @inline
@@ -350,16 +370,6 @@ def _face_row(vertices, bits, faces, k, kind, cull, hashes):
         for a in range(3):
             x = _mix(x, bits[faces[k, v], a])
     hashes[k] = _mix(x, np.uint64(0))
-
-
-@kernel(parallel=True)
-def _face_rows(vertices, faces, kind, cull, hashes):
-    """:func:`primitive_cull` and :func:`_row_hashes` of the hulls of three
-    points ``faces`` of ``vertices`` (triangles), of kind ``kind``, in one
-    pass over the faces."""
-    bits = vertices.view(np.uint64)
-    for k in prange(faces.shape[0]):
-        _face_row(vertices, bits, faces, np.int64(k), kind, cull, hashes)
 
 
 def _all_different(hashes):
@@ -410,10 +420,44 @@ def _face_params(vertices, faces, order, params, j):
         params[j, c] = 0.0
 
 
-@kernel(parallel=True)
-def _face_gather(vertices, faces, order, params):
-    for j in prange(order.shape[0]):
-        _face_params(vertices, faces, order, params, np.int64(j))
+#: The steps of :func:`_face_step`.
+_FACE_ROWS, _FACE_PARAMS = 0, 1
+#: Faces per call of :func:`_face_step`.
+_FACE_CHUNK = 8192
+
+
+@kernel(nogil=True)
+def _face_step(step, lo, hi, vertices, bits, faces, order, kind, cull, hashes, params):
+    """One pass over the faces ``lo .. hi - 1`` (of ``faces`` of ``vertices``,
+    whose bits are ``bits``, hulls of three points of kind ``kind``); one
+    kernel for both passes.
+
+    ``_FACE_ROWS``: their :func:`primitive_cull` rows and :func:`_row_hashes`.
+    ``_FACE_PARAMS``: the parameters of the faces ``faces[order[lo:hi]]``.
+    """
+    if step == _FACE_ROWS:
+        for k in range(lo, hi):
+            _face_row(vertices, bits, faces, k, kind, cull, hashes)
+    else:
+        for j in range(lo, hi):
+            _face_params(vertices, faces, order, params, j)
+
+
+# The arguments of :func:`_face_step` that a pass does not use.
+_NO_ORDER = readonly(np.empty(0, np.int64), np.int64)
+_NO_CULL = np.empty((0, CULL_COLUMNS))
+_NO_HASHES = np.empty(0, np.uint64)
+_NO_PARAMS = np.empty((0, primitives.N_PARAMS))
+
+
+def _faces(step, vertices, faces, order, kind, cull, hashes, params, n):
+    """:func:`_face_step` over ``n`` faces, on the threads."""
+    bits = vertices.view(np.uint64)  # here: a view in a kernel compiles a function of its own
+    _threads.spread(
+        lambda lo, hi: _face_step(step, lo, hi, vertices, bits, faces, order, kind, cull, hashes, params),
+        n,
+        _FACE_CHUNK,
+    )
 
 
 def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
@@ -428,9 +472,10 @@ def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
         np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
         params[:, 9:] = 0.0
         return params
-    order = np.arange(len(faces)) if order is None else order
+    order = readonly(np.arange(len(faces)) if order is None else order, np.int64)
     params = empty(len(order), width)
-    _face_gather(readonly(vertices, np.float64), readonly(faces, np.int64), readonly(order, np.int64), params)
+    vertices, faces = readonly(vertices, np.float64), readonly(faces, np.int64)
+    _faces(_FACE_PARAMS, vertices, faces, order, np.int64(0), _NO_CULL, _NO_HASHES, params, len(order))
     return params
 
 
@@ -534,7 +579,7 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     n = len(faces)
     cull = empty(n, CULL_COLUMNS)
     hashes = np.empty(n, np.uint64)
-    _face_rows(vertices, faces, kind, cull, hashes)
+    _faces(_FACE_ROWS, vertices, faces, _NO_ORDER, np.int64(kind), cull, hashes, _NO_PARAMS, n)
     kinds = np.full(n, kind, np.int8)
     if not _all_different(hashes):
         return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)

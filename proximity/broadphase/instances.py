@@ -31,15 +31,13 @@ import collections
 import functools
 import math
 
-import numba
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from .. import primitives
 from .._jit import launcher, specialize
 from ._alloc import readonly
-from .traverse import _C1I, _C2F, _OUTPUTS, _TREE, BLOCK, NONE, Outputs, TreeArrays, descent
+from .traverse import _C1I, _C2F, _OUTPUTS, _TREE, BLOCK, NONE, SEARCH_GRAIN, Outputs, TreeArrays, descent
 
 #: The poses and places of the instances: the prototype of each, its rotation
 #: and translation, its world box (low and high corners, and the magnitude of
@@ -66,7 +64,8 @@ _BLOCK_SIGNATURE = types.void(
     types.int64, _TREE, _C1I, types.Array(types.float64, 1, "C", readonly=True), types.int64,
     _INSTANCES, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64,
 )  # fmt: skip
-_LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
+# (handle, first block, end block, forest, ...)
+_LOOP_SIGNATURE = types.void(types.int64, types.int64, types.int64, *_BLOCK_SIGNATURE.args[1:])
 
 #: The slack on an instance's world box, relative to the coordinates' magnitude.
 BOX_SLACK = 2.0**-40
@@ -195,10 +194,16 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
             prim[i] = best_index
 
 
-def _loop(handle, forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff):
-    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
+def _loop(handle, lo, hi, forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff):
+    """:func:`_instances_block` for the blocks of points ``lo .. hi - 1``."""
+    for block in range(lo, hi):
         args = (forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff)
-        CALL(handle, np.int64(block), *args)
+        CALL(handle, block, *args)
+
+
+def _blocks(forest, roots, magnitudes, depth, inst, points, *args):
+    """The number of blocks of :func:`_loop`."""
+    return (points.shape[0] + BLOCK - 1) // BLOCK
 
 
 @functools.cache
@@ -213,7 +218,7 @@ def instances_kernel(method, present, radius=-1):
         DESCEND=descent(method, present, radius),
         SEED_POINT=not method.loose,
     )
-    return launcher(_loop, "instances", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
+    return launcher(_loop, "instances", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE, _blocks, SEARCH_GRAIN)
 
 
 def forest(trees, loose=False):
@@ -330,9 +335,8 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
     present = primitives.present(arrays.kinds)
     kinds = present if len(present) == 1 else primitives.offering(method)
     order = readonly(_visiting_order(points), np.int64)
-    with numba.parallel_chunksize(1):
-        search = instances_kernel(method, kinds, radius)
-        search(arrays, roots, magnitudes, depth, instances, points, order, out, full, float(cutoff))
+    search = instances_kernel(method, kinds, radius)
+    search(arrays, roots, magnitudes, depth, instances, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
         _resolve(trees, instances, rows, points, out, full, loose, cutoff)

@@ -2,7 +2,6 @@
 
 import math
 
-import numba
 import numpy as np
 
 from .. import primitives
@@ -116,9 +115,8 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     # other, the one search for every kind that offers the method (not one
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
-    with numba.parallel_chunksize(1):
-        search = search_kernel(method, kinds, tree.radius)
-        search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
+    search = search_kernel(method, kinds, tree.radius)
+    search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
         _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff)

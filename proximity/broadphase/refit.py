@@ -11,9 +11,9 @@ import numba
 import numpy as np
 from numba import prange
 
-from .. import _pool, primitives
+from .. import _pool, _threads, primitives
 from .._jit import inline, kernel
-from ._alloc import empty, readonly
+from ._alloc import empty, empty_ints, readonly
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
@@ -39,9 +39,10 @@ def _rows(child, count, i):
     return first, child[k] + count[k]
 
 
-@kernel()
-def _refit_top(child, count):
-    """The tasks of :func:`refit`: ``(top, tasks, start, end)``.
+@inline
+def _refit_top(child, count, top, tasks, start, end):
+    """The tasks of :func:`refit`: ``(n_top, n_tasks)``, the first entries of
+    ``top`` and ``tasks`` set.
 
     ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
     a node before its children; ``tasks`` the roots of the subtrees below
@@ -50,10 +51,6 @@ def _refit_top(child, count):
     stored primitives ``start[i] .. end[i] - 1``.
     """
     m = child.shape[0]
-    start = np.empty(m, np.int64)
-    end = np.empty(m, np.int64)
-    top = np.empty(m, np.int64)
-    tasks = np.empty(m, np.int64)
     stack = np.empty(m + 1, np.int64)
     n_top = 0
     n_tasks = 0
@@ -73,7 +70,7 @@ def _refit_top(child, count):
         else:
             tasks[n_tasks] = i
             n_tasks += 1
-    return top[:n_top].copy(), tasks[:n_tasks].copy(), start, end
+    return n_top, n_tasks
 
 
 @inline
@@ -399,22 +396,51 @@ def _fit_faces(
         _frame_and_ranges(bounds, top[t], start, end, child, count, kinds, params, cull, hull)
 
 
-@kernel(parallel=True)
-def _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, vertices):
-    """The bounds of every node (see :func:`refit`).
+#: The steps of :func:`_fit_step`.
+_TASKS, _SUBTREES, _TOP, _FRAMES = 0, 1, 2, 3
 
-    The subtrees at ``tasks`` are fitted one per task; then the boxes and
-    normal sums of the ``top`` nodes, children first; then the frames and
-    ranges of the top nodes and of the subtrees' roots, one per task.
+
+@kernel(nogil=True)
+def _fit_step(
+    step, lo, hi, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, vertices
+):
+    """One step of :func:`refit` on the tasks ``lo .. hi - 1``: one kernel for
+    every step, so that a first build compiles one.  Returns ``(n_top,
+    n_tasks)`` for ``_TASKS`` (:func:`_refit_top`), else zeros.
+
+    ``_SUBTREES``: the subtrees at ``tasks[lo:hi]``, one per task.
+    ``_TOP``: the boxes and normal sums of the ``top`` nodes, children
+    first.  ``_FRAMES``: the frames and ranges of the nodes ``lo .. hi - 1``
+    of the top nodes followed by the subtrees' roots.
     """
-    for j in prange(tasks.shape[0]):
-        _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, normals, vertices)
-    for t in range(top.shape[0] - 1, -1, -1):
-        _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
-    for j in prange(top.shape[0] + tasks.shape[0]):
-        i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
-        _frame(bounds, i)
-        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+    if step == _TASKS:
+        return _refit_top(child, count, top, tasks, start, end)
+    if step == _SUBTREES:
+        for j in range(lo, hi):
+            _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, normals, vertices)
+    elif step == _TOP:
+        for t in range(top.shape[0] - 1, -1, -1):
+            _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
+    else:
+        for j in range(lo, hi):
+            i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
+            _frame(bounds, i)
+            _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+    return 0, 0
+
+
+def _tasks(bounds, child, count, kinds, params, cull, normals):
+    """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length.
+
+    ``params``, ``cull`` and ``normals`` are passed read-only whatever they
+    are, so that a refit and the first fit call the kernel with the same
+    types."""
+    m = len(child)
+    top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
+    n_top, n_tasks = _fit_step(
+        _TASKS, 0, 0, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, _VERTICES
+    )
+    return top[:n_top], tasks[:n_tasks], start, end
 
 
 def refit(child, count, kinds, params, cull, normals=None):
@@ -451,11 +477,19 @@ def refit(child, count, kinds, params, cull, normals=None):
         bounds[0, 9::5] = -math.inf
         bounds[0, 10::5] = math.inf
         return bounds
-    top, tasks, start, end = _refit_top(child, count)
     bounds = empty(len(child), NODE_COLUMNS)
+    params = readonly(params, np.float64)
+    cull, normals = readonly(cull, cull.dtype), readonly(normals, normals.dtype)
+    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull, normals)
+
+    def run(step, lo, hi):
+        tree = (top, tasks, start, end, child, count, kinds, params, cull, normals)
+        _fit_step(step, lo, hi, bounds, *tree, _VERTICES)
+
     # Tasks differ in size by orders of magnitude: handed out one at a time.
-    with numba.parallel_chunksize(1):
-        _fit(bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, _VERTICES)
+    _threads.spread(lambda lo, hi: run(_SUBTREES, lo, hi), len(tasks))
+    run(_TOP, 0, 0)
+    _threads.spread(lambda lo, hi: run(_FRAMES, lo, hi), len(top) + len(tasks))
     return bounds
 
 
@@ -503,8 +537,8 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     if len(child) == 1:
         _gather_faces(vertices, faces, order, params, cull)
         return params, cull, refit(child, count, kinds, params, cull)
-    top, tasks, start, end = _refit_top(child, count)
     bounds = _pool.empty((len(child), NODE_COLUMNS))
+    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull)
     with numba.parallel_chunksize(1):
         _fit_faces(
             vertices,

@@ -22,7 +22,6 @@ import functools
 import math
 
 import numpy as np
-from numba import prange
 from numba.core import types
 
 from .. import certified
@@ -30,7 +29,10 @@ from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
-BLOCK = 64  # points per parallel task: the unit of dynamic scheduling
+BLOCK = 64  # points per block function call
+#: Fewest blocks a thread takes at a time: a thread started for fewer would
+#: cost about as much as it saves.
+SEARCH_GRAIN = 4
 NONE = -1  # the feature of a row with no answer
 
 #: The arrays of a tree that the search reads.
@@ -56,7 +58,8 @@ _OUTPUTS = types.NamedTuple(
 _BLOCK_SIGNATURE = types.void(
     types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64
 )
-_LOOP_SIGNATURE = types.void(types.int64, *_BLOCK_SIGNATURE.args[1:])
+# (handle, first block, end block, tree, ...)
+_LOOP_SIGNATURE = types.void(types.int64, types.int64, types.int64, *_BLOCK_SIGNATURE.args[1:])
 
 # Bound per method and set of kinds by :func:`proximity._jit.specialize`:
 # the primitives' evaluation and interval (chains over the kinds, see
@@ -287,10 +290,15 @@ def _less(lo, hi, radius):
     return lo - radius - w, hi - radius + w
 
 
-def _loop(handle, tree, depth, magnitude, points, order, out, full, cutoff):
-    """:func:`_search_block` for every block of points, on the threads."""
-    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
-        CALL(handle, np.int64(block), tree, depth, magnitude, points, order, out, full, cutoff)
+def _loop(handle, lo, hi, tree, depth, magnitude, points, order, out, full, cutoff):
+    """:func:`_search_block` for the blocks of points ``lo .. hi - 1``."""
+    for block in range(lo, hi):
+        CALL(handle, block, tree, depth, magnitude, points, order, out, full, cutoff)
+
+
+def _blocks(tree, depth, magnitude, points, *args):
+    """The number of blocks of :func:`_loop`."""
+    return (points.shape[0] + BLOCK - 1) // BLOCK
 
 
 def _link(kinds, q, k, px, py, pz):
@@ -359,7 +367,7 @@ def search_kernel(method, present, radius=-1):
         role="pointer",
         DESCEND=descent(method, present, radius),
     )
-    return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE)
+    return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE, _blocks, SEARCH_GRAIN)
 
 
 @kernel()

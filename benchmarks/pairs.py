@@ -1,0 +1,308 @@
+"""Mesh against mesh: the distance between two posed meshes, against python-fcl and coal.
+
+    python -m benchmarks.pairs [--quick] [--out DIR] [--seed 0]
+
+**The pair.**  An icosphere of 20,480 faces (radius 1) and a torus of
+20,480 faces (radii 1 and 0.35; ``--quick``: 1,280 faces each), the torus
+turned at random and moved along a random direction until the two are
+about ``gap`` apart (by proximity's own answer), for gaps 1, 1e-2 and
+1e-4, and then moved 0.05 further in to overlap; 5 poses per gap
+(``--quick``: 2).  Every library answers the same pairs of posed meshes,
+its hierarchies built once outside the timing:
+
+* proximity: ``proximity.distance(sphere, torus.transformed(T))``, the
+  ``robust`` and the ``certified`` method, one thread (one query);
+* python-fcl: ``fcl.distance`` of two ``CollisionObject`` over
+  ``BVHModel`` (OBBRSS), the torus's moved by ``setTransform``;
+* coal: ``coal.distance`` of two ``BVHModelOBBRSS`` with their
+  ``Transform3s``.
+
+A peer that is not installed, or fails to import, is skipped.  Timing: each
+pose's query is repeated (5 times, ``--quick``: 2) by each library in
+turn, the least time kept; the table gives the median over the poses.
+
+**Accuracy** against the exact minimum over all pairs of faces of the
+torus posed in float64 (``torus.transformed(T)``'s vertices ``R V + t``
+as :func:`proximity.posed.to_world` rounds them): a face of one mesh can
+hold a pair within ``D`` only where its centroid's distance to the other
+mesh, less its circumradius, is at most ``D`` (``D`` an upper bound of the
+minimum, with a margin far beyond the point queries' error); the pairs of
+those faces are evaluated by the ``robust`` triangle pair, and those whose
+answer could be the least (within twice its bound) in rational arithmetic
+(:mod:`proximity.testing.exact`).  A negative answer of a peer (its
+convention for "in collision") counts as 0.  The table gives the largest
+absolute error over the poses.
+
+``OUT/pairs.json`` holds the raw data; the project's target (proximity at
+least 2x faster than python-fcl and coal at a gap of 1e-2) is checked
+apart in ``OUT/checks-pairs.txt``.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import mpmath
+import numpy as np
+
+import proximity
+from benchmarks.moving import _installed, random_rotations
+from proximity.posed import to_world
+from proximity.testing.exact import PREC
+from proximity.testing.meshes import icosphere, torus
+
+GAPS = (1.0, 1e-2, 1e-4, -0.05)
+EPS = 2.0**-52
+
+
+def meshes(quick):
+    """``((vertices, faces) of the icosphere, of the torus)``."""
+    return (icosphere(3), torus(32, 20)) if quick else (icosphere(5), torus(128, 80))
+
+
+def poses(sphere, ring, rng, gap, count):
+    """``count`` poses of ``ring`` about ``gap`` from ``sphere`` (a negative gap: that much further in
+    from about 1e-3)."""
+    out = []
+    for rotation in random_rotations(rng, count):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        t = 3.0 * u
+        target = gap if gap > 0 else 1e-3
+        for _ in range(60):
+            pose = np.eye(4)
+            pose[:3, :3], pose[:3, 3] = rotation, t
+            d = float(proximity.distance(sphere, ring.transformed(pose)))
+            if abs(d - target) <= 1e-3 * target:
+                break
+            t = t + (target - d) * u
+        if gap < 0:
+            pose[:3, 3] = t + gap * u
+        out.append(pose)
+    return out
+
+
+def exact_distance(va, fa, vb, fb, upper):
+    """The exact minimum distance over the face pairs of two meshes (an ``mpmath`` number), given
+    ``upper``, a float at least the minimum; see the module docstring."""
+    from proximity.testing import exact
+
+    mesh_a, mesh_b = proximity.TriangleMesh(va, fa), proximity.TriangleMesh(vb, fb)
+    margin = 1e-9 + 1e-9 * upper
+
+    def near(tris, other):
+        centroid = tris.mean(axis=1)
+        radius = np.max(np.linalg.norm(tris - centroid[:, None], axis=-1), axis=1)
+        return np.flatnonzero(other.distance(centroid) - radius <= upper + margin)
+
+    ta, tb = va[fa], vb[fb]
+    ia, ib = near(ta, mesh_b), near(tb, mesh_a)
+    robust = proximity.distance(proximity.Triangle(ta[ia][:, None]), proximity.Triangle(tb[ib][None, :]))
+    scale = float(np.max(np.ptp(np.concatenate([ta[ia].reshape(-1, 3), tb[ib].reshape(-1, 3)]), axis=0)))
+    bound = 16 * EPS * scale + 2.0**-1070
+    best = None
+    for i, j in np.argwhere(robust <= robust.min() + 2 * bound):
+        sqr = exact.triangle_triangle_closest(ta[ia[i]], tb[ib[j]]).sqr_distance
+        best = sqr if best is None or sqr < best else best
+        if best == 0:  # a common point: nothing is nearer
+            break
+    with mpmath.workprec(exact.PREC):
+        return mpmath.sqrt(exact.to_mpf(best)), len(ia) * len(ib)
+
+
+def _fcl(vertices, faces):
+    import fcl
+
+    model = fcl.BVHModel()
+    model.beginModel(len(vertices), len(faces))
+    model.addSubModel(np.ascontiguousarray(vertices), np.ascontiguousarray(faces))
+    model.endModel()
+    return model
+
+
+def fcl_query(mesh_a, mesh_b):
+    """A function of a pose: fcl's distance between the meshes, b posed."""
+    import fcl
+
+    a = fcl.CollisionObject(_fcl(*mesh_a), fcl.Transform())
+    b = fcl.CollisionObject(_fcl(*mesh_b), fcl.Transform())
+    request = fcl.DistanceRequest()
+
+    def query(pose):
+        b.setTransform(fcl.Transform(pose[:3, :3], pose[:3, 3]))
+        return fcl.distance(a, b, request, fcl.DistanceResult())
+
+    return query
+
+
+def _coal(vertices, faces):
+    import coal
+
+    model = coal.BVHModelOBBRSS()
+    model.beginModel(len(faces), len(vertices))
+    model.addVertices(np.ascontiguousarray(vertices))
+    model.addTriangles(np.ascontiguousarray(faces, dtype=np.int64))
+    model.endModel()
+    return model
+
+
+def coal_query(mesh_a, mesh_b):
+    """A function of a pose: coal's distance between the meshes, b posed."""
+    import coal
+
+    a, b = _coal(*mesh_a), _coal(*mesh_b)
+    identity = coal.Transform3s()
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+
+    def query(pose):
+        result.clear()
+        return coal.distance(a, identity, b, coal.Transform3s(pose[:3, :3], pose[:3, 3]), request, result)
+
+    return query
+
+
+def proximity_query(mesh_a, mesh_b, method):
+    a, b = proximity.TriangleMesh(*mesh_a), proximity.TriangleMesh(*mesh_b)
+
+    def query(pose):
+        return float(proximity.distance(a, b.transformed(pose), method=method))
+
+    return query
+
+
+LIBRARIES = (
+    ("robust", "proximity, robust", None, lambda a, b: proximity_query(a, b, "robust")),
+    ("certified", "proximity, certified", None, lambda a, b: proximity_query(a, b, "certified")),
+    ("fcl", "python-fcl", "fcl", fcl_query),
+    ("coal", "coal", "coal", coal_query),
+)
+
+
+def run(quick=False, seed=0, log=print):
+    """Every gap and library; the raw data."""
+    rng = np.random.default_rng(seed)
+    mesh_a, mesh_b = meshes(quick)
+    count, repeats = (2, 2) if quick else (5, 5)
+    sphere, ring = proximity.TriangleMesh(*mesh_a), proximity.TriangleMesh(*mesh_b)
+    queries, rows = {}, {}
+    for key, label, module, make in LIBRARIES:
+        problem = _installed(module) if module else None
+        rows[key] = {"label": label}
+        if problem:
+            rows[key]["skipped"] = problem
+            log(f"{label}: skipped ({problem})")
+            continue
+        queries[key] = make(mesh_a, mesh_b)
+        queries[key](np.eye(4))  # compiled, and the hierarchies built
+    gaps = []
+    for gap in GAPS:
+        log(f"gap {gap:g}: posing")
+        pose_list = poses(sphere, ring, rng, gap, count)
+        times = {key: [] for key in queries}
+        answers = {key: [] for key in queries}
+        references, exact_values, pairs_checked = [], [], []
+        for pose in pose_list:
+            for key, query in queries.items():
+                answers[key].append(query(pose))
+            best = {key: np.inf for key in queries}
+            for _ in range(repeats):
+                for key, query in queries.items():  # in turn, so that a busy machine slows all alike
+                    start = time.perf_counter()
+                    query(pose)
+                    best[key] = min(best[key], time.perf_counter() - start)
+            for key in queries:
+                times[key].append(best[key])
+            posed_b = to_world(mesh_b[0], pose[:3, :3], pose[:3, 3])
+            upper = max(answers["robust"][-1], 0.0) + 1e-6 if "robust" in answers else 10.0
+            d_exact, checked = exact_distance(mesh_a[0], mesh_a[1], posed_b, mesh_b[1], upper)
+            references.append(float(d_exact))
+            exact_values.append(d_exact)
+            pairs_checked.append(checked)
+        row = {"gap": gap, "exact": references, "face_pairs_checked": pairs_checked, "libraries": {}}
+        for key in queries:
+            d = np.maximum(np.array(answers[key], dtype=np.float64), 0.0)
+            # In mpmath: an error below the ulp of the distance is not lost to rounding.
+            with mpmath.workprec(PREC):
+                errors = [float(abs(mpmath.mpf(float(x)) - r)) for x, r in zip(d, exact_values, strict=True)]
+            row["libraries"][key] = {
+                "time": float(np.median(times[key])),
+                "times": times[key],
+                "answers": [float(x) for x in answers[key]],
+                "error": max(errors),
+            }
+        gaps.append(row)
+        timing = ", ".join(f"{k} {v['time'] * 1e3:.3f} ms" for k, v in row["libraries"].items())
+        log(f"gap {gap:g}: {timing}")
+    meta = {"cpus": os.cpu_count(), "quick": quick, "seed": seed, "faces": [len(mesh_a[1]), len(mesh_b[1])],
+            "poses": count, "repeats": repeats, "load_average": list(os.getloadavg()),
+            "proximity": proximity.__version__}  # fmt: skip
+    return {"meta": meta, "rows": rows, "gaps": gaps}
+
+
+def checks(raw):
+    """The project's target: ``(missed, lines)``."""
+    lines, missed = [], 0
+    for row in raw["gaps"]:
+        if row["gap"] != 1e-2:
+            continue
+        ours = row["libraries"]["robust"]["time"]
+        for key in ("fcl", "coal"):
+            if key not in row["libraries"]:
+                lines.append(f"skipped  mesh-mesh at 1e-2 against {key}: not measured")
+                continue
+            ratio = row["libraries"][key]["time"] / ours
+            met = ratio >= 2.0
+            missed += not met
+            lines.append(f"{'met   ' if met else 'MISSED'}  mesh-mesh at 1e-2 against {key}: {ratio:.1f}x "
+                         "(target at least 2x)")  # fmt: skip
+    return missed, lines
+
+
+def report(raw):
+    """The run as text: time per query and largest error per gap and library."""
+    meta = raw["meta"]
+    lines = [f"icosphere of {meta['faces'][0]:,} faces against a torus of {meta['faces'][1]:,}, "
+             f"{meta['poses']} poses per gap; median ms per query (least of {meta['repeats']}), "
+             "largest error against the exact distance"]  # fmt: skip
+    keys = [k for k in raw["rows"] if "skipped" not in raw["rows"][k]]
+    head = "".join(f"{raw['rows'][k]['label']:>34s}" for k in keys)
+    lines.append(f"  {'gap':>8s}{head}")
+    for row in raw["gaps"]:
+        cells = "".join(
+            f"{row['libraries'][k]['time'] * 1e3:>14.3f} ms  err {row['libraries'][k]['error']:8.1e}"
+            for k in keys
+        )
+        lines.append(f"  {'overlap' if row['gap'] < 0 else format(row['gap'], 'g'):>8s}{cells}")
+    for row in raw["rows"].values():
+        if "skipped" in row:
+            lines.append(f"  {row['label']}: skipped ({row['skipped']})")
+    lines.append(f"load average during the run: {meta['load_average']}")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    """Command line: see the module docstring."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.pairs", description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small meshes and fewer poses, a smoke run")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default="bench-results", help="directory for pairs.json")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with np.errstate(all="ignore"):
+        raw = run(quick=args.quick, seed=args.seed, log=lambda text: print(text, file=sys.stderr, flush=True))
+    (out / "pairs.json").write_text(json.dumps(raw, indent=1))
+    print(report(raw))
+    print(f"raw data: {out / 'pairs.json'}")
+    missed, lines = checks(raw)
+    verdicts = out / "checks-pairs.txt"
+    verdicts.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    print(f"the project's target: {len(lines) - missed} of {len(lines)} met ({verdicts})", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
