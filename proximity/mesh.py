@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _lazy, _threads
+from . import _lazy, _pool, _threads
 from ._collection import Collection
 from ._meshlike import vertices_and_faces
 from ._typing import ArrayLike, Bools, Distances, Floats
@@ -33,7 +33,7 @@ from ._validate import (
     frozen_float64,
     require_finite,
 )
-from .primitives import TRIANGLE
+from .primitives import N_PARAMS, TRIANGLE
 from .results import MeshResult, _frozen, format_repr
 from .shapes import DEFAULT_METHOD, keyword_only
 
@@ -130,7 +130,7 @@ class TriangleMesh(Collection):
             broad_phase,
             len(f),
             lambda bp: bp.build_faces(v, f, TRIANGLE.code),
-            lambda bp: bp.brute(*_primitives(v, f)),
+            lambda bp: bp.brute(*_primitives(v, f, TRIANGLE.width)),
         )
         self._init(
             vertices=v, faces=f, broad_phase=resolved, _tree=tree, _signs=None, _winding=None, _normals=None
@@ -701,9 +701,11 @@ class TriangleMesh(Collection):
             params, cull, bounds = broadphase.refit_faces(
                 v, self.faces, tree.index, tree.child, tree.count, tree.kinds
             )
+            # The float32 rows it keeps on recycled memory too, as the refit's.
             moved = broadphase.assemble(
-                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds
-            )
+                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
+                empty=_pool.empty,
+            )  # fmt: skip
         mesh = object.__new__(TriangleMesh)
         mesh._init(
             vertices=v,
@@ -739,7 +741,7 @@ class TriangleMesh(Collection):
 
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""
-        return _primitives(self.vertices, self.faces[index])
+        return _primitives(self.vertices, self.faces[index], TRIANGLE.width)
 
     def _rows(self):
         """``(kinds, params)`` of every face, in order, as a collection stores them."""
@@ -760,10 +762,10 @@ def _points(points):
     return points
 
 
-def _primitives(vertices, faces):
-    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates."""
+def _primitives(vertices, faces, width=N_PARAMS):
+    """``(kinds, params)`` of the broad phase for ``faces``: each face's nine coordinates, ``width`` wide."""
     broadphase = _lazy.load("proximity.broadphase")
-    return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces)
+    return np.full(len(faces), TRIANGLE.code, np.int8), broadphase.face_params(vertices, faces, width=width)
 
 
 @dataclasses.dataclass(frozen=True, repr=False)

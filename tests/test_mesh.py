@@ -440,3 +440,44 @@ def test_adapters_answer_for_meshes_within_their_documented_tolerance(name):
         # The library's face is a nearest one: at our distance, up to the tolerance.
         d = proximity.Triangle(vertices[faces[r.result.face]]).distance(points)
         assert (np.abs(d - ours.distance) <= r.tolerance).all()
+
+
+@pytest.mark.parametrize("scale", [2.0**-1000, 1e-40, 1.0, 1e39, 2.0**1000])
+@pytest.mark.parametrize("offset", [0.0, 3.0])
+def test_the_bounds_a_tree_keeps_hold_what_they_bound(scale, offset):
+    """Every node's box and slabs hold its faces' vertices, its axes make a
+    matrix of norm at most 1 (so that their excesses add in squares), and
+    every cull row, kept in float32, holds its face, at scales beyond
+    float32's range too; and the answers are brute force's."""
+    vertices, faces = soup(np.random.default_rng(4), 400, degenerate=0.2)
+    vertices = (vertices + offset) * scale
+    mesh = TriangleMesh(vertices, faces)
+    tree = mesh._tree
+    assert tree.cull.dtype == np.float32
+    corners = tree.params[:, :9].reshape(-1, 3, 3)
+    cull = tree.cull.astype(np.float64)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    assert (lo >= cull[:, :3]).all() and (hi <= cull[:, 3:6]).all()
+    assert (np.linalg.norm(cull[:, 6:9], axis=1) <= 1.0).all()
+    # Within the few eps of the coordinates' magnitude that the pruning allows for.
+    slack = 16 * EPS * np.abs(corners).max()
+    h = np.einsum("nvc,nc->nv", corners, cull[:, 6:9])
+    assert (h >= cull[:, 9:10] - slack).all() and (h <= cull[:, 10:11] + slack).all()
+    first, last = np.empty(tree.nodes, np.int64), np.empty(tree.nodes, np.int64)
+    for i in range(tree.nodes - 1, -1, -1):  # children come after their parent
+        if tree.count[i] > 0:
+            first[i], last[i] = tree.child[i], tree.child[i] + tree.count[i]
+        else:
+            first[i], last[i] = first[tree.child[i]], last[tree.child[i] + 1]
+    bounds = tree.bounds
+    for i in range(tree.nodes):
+        points = corners[first[i] : last[i]].reshape(-1, 3)
+        assert (points >= bounds[i, :3]).all() and (points <= bounds[i, 3:6]).all(), i
+        frame = bounds[i, [6, 7, 8, 11, 12, 13, 16, 17, 18]].reshape(3, 3)
+        assert np.linalg.norm(frame, 2) <= 1.0, i
+        for c in (6, 11, 16):
+            h = points @ bounds[i, c : c + 3]
+            assert (h >= bounds[i, c + 3] - slack).all() and (h <= bounds[i, c + 4] + slack).all(), (i, c)
+    points = box_points(np.random.default_rng(5), vertices, 300)
+    brute = TriangleMesh(vertices, faces, broad_phase="brute")
+    assert_same(brute.closest_point(points), mesh.closest_point(points))

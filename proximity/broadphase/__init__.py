@@ -27,12 +27,14 @@ for its rows.  One module per job:
     The search of a batch, and the certified rows finished exactly.
 """
 
+from .bounds import FACE_COLUMNS
 from .build import LEAF_SIZE, assemble, brute, build_faces, build_tree, face_params
 from .nearest import nearest
 from .refit import refit_faces
 from .tree import Tree
 
 __all__ = [
+    "FACE_COLUMNS",
     "LEAF_SIZE",
     "Tree",
     "assemble",

@@ -47,6 +47,13 @@ of ``M``, the largest coordinate magnitude of the point and of every box:
   computed distance exceeds ``best``, so even ties are visited, and the
   lowest index wins in both.
 
+The tree keeps its primitives' cull rows in float32 (:func:`stored_cull`),
+half the memory: boxes rounded outwards, slab axes towards zero (no
+longer than before) with their ranges widened by what the rounding of the
+axis can move ``u . X`` over the box, then rounded outwards.  Each row
+still holds its primitive, so the argument above is unchanged; a
+coordinate beyond float32's range leaves its side of the box unbounded.
+
 ``eberly``'s circle is the exception: near the axis it takes the rim
 direction from rounding noise, so its closest point can leave the plane by
 up to ``R``.  For that method circles are bounded by the cube ``C +- R``
@@ -57,6 +64,7 @@ previous closest point bounds the search.
 import math
 
 import numpy as np
+from numba import prange
 
 from .. import primitives
 from .._fp import EPS
@@ -67,6 +75,13 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 
 #: Columns of a primitive's cull row: its box ``(lo, hi)``, then one slab ``(u, h_min, h_max)``.
 CULL_COLUMNS = 11
+
+#: Columns of the rows of a tree of faces alone (hulls of three points):
+#: their nine coordinates, without the padding of a collection of several
+#: kinds to :data:`~proximity.primitives.N_PARAMS`.
+FACE_COLUMNS = 9
+
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @inline
@@ -211,6 +226,68 @@ def primitive_cull(kinds, params):
         for rows in (cull,) if looser is cull else (cull, looser):
             _widen(rows, radius)
     return cull, looser
+
+
+@inline
+def _down32(x):
+    """A float32 at most ``x``: ``x`` moved down by a float32 spacing (``2^-23`` of
+    it, and the least subnormal), then rounded to nearest, which moves it
+    back up by half a spacing at most; the float64 rounding of the move is
+    far inside the other half.  1e39 goes to the largest float32, -1e39 to
+    -inf; infinities stay."""
+    if not math.isfinite(x):
+        return np.float32(x)
+    return np.float32(min(x - abs(x) * 2.0**-23 - 2.0**-149, _FLOAT32_MAX))
+
+
+@inline
+def _up32(x):
+    """A float32 at least ``x`` (see :func:`_down32`)."""
+    return -_down32(-x)
+
+
+@inline
+def _stored_row(cull, k, out):
+    """Row ``k`` of :func:`stored_cull`."""
+    for a in range(3):
+        out[k, a] = _down32(cull[k, a])
+        out[k, 3 + a] = _up32(cull[k, 3 + a])
+    # The axis towards zero, so it stays no longer than 1; u' . X differs
+    # from u . X by at most sum |u - u'| max(|lo|, |hi|) over the box
+    # (each difference exact: u' is near u, on a grid as fine as u's), and
+    # the widening is rounded up beyond the sum's rounding.
+    widen = 0.0
+    for a in range(3):
+        u = cull[k, 6 + a]
+        f = math.copysign(max(np.float64(_down32(abs(u))), 0.0), u)
+        out[k, 6 + a] = np.float32(f)
+        d = abs(u - f)
+        if d > 0.0:
+            widen += d * max(abs(cull[k, a]), abs(cull[k, 3 + a]))
+    widen *= 1.0 + 2.0**-40
+    out[k, 9] = _down32(cull[k, 9] - widen)
+    out[k, 10] = _up32(cull[k, 10] + widen)
+
+
+@kernel(parallel=True)
+def _stored_rows(cull, out):
+    for k in prange(cull.shape[0]):
+        _stored_row(cull, k, out)
+
+
+def stored_cull(cull, empty=np.empty):
+    """The cull rows ``(n, 11)`` as the tree keeps them: float32, each still
+    holding its primitive (see the module docstring), in an array from
+    ``empty(shape, dtype)``.
+
+    Parameters
+    ----------
+    cull : ndarray of float64, shape ``(n, CULL_COLUMNS)``
+        Rows of :func:`primitive_cull`.
+    """
+    out = empty(cull.shape, np.float32)
+    _stored_rows(readonly(cull, np.float64), out)
+    return out
 
 
 def _widen(cull, radius):

@@ -21,7 +21,7 @@ import numpy as np
 from .. import _threads, primitives
 from .._jit import inline, kernel
 from ._alloc import GATHER_MIN, empty, empty_ints, readonly, take_rows
-from .bounds import CULL_COLUMNS, plane_row, primitive_cull
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
 
@@ -460,42 +460,57 @@ def _faces(step, vertices, faces, order, kind, cull, hashes, params, n):
     )
 
 
-def face_params(vertices, faces, order=None):
-    """The stored rows ``(F, primitives.N_PARAMS)`` of the faces ``faces`` of
-    ``vertices`` (those ``faces[order]``, if given), hulls of three points:
-    each face's nine coordinates, then zeros."""
+def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
+    """The stored rows ``(F, width)`` of the faces ``faces`` of ``vertices``
+    (those ``faces[order]``, if given), hulls of three points: each face's
+    nine coordinates, then zeros.  A collection of several kinds has rows
+    of ``N_PARAMS`` columns (the default); a tree of faces alone keeps
+    :data:`FACE_COLUMNS`."""
     if order is None and len(faces) < GATHER_MIN:
-        params = np.empty((len(faces), primitives.N_PARAMS))
+        params = np.empty((len(faces), width))
         # Gathered straight into the rows; the faces index the vertices.
         np.take(vertices, faces, axis=0, out=params[:, :9].reshape(-1, 3, 3), mode="clip")
         params[:, 9:] = 0.0
         return params
     order = readonly(np.arange(len(faces)) if order is None else order, np.int64)
-    params = empty(len(order), primitives.N_PARAMS)
+    params = empty(len(order), width)
     vertices, faces = readonly(vertices, np.float64), readonly(faces, np.int64)
     _faces(_FACE_PARAMS, vertices, faces, order, np.int64(0), _NO_CULL, _NO_HASHES, params, len(order))
     return params
 
 
-def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None):
+def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None, empty=np.empty):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
     ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
-    computed here when not given; the node bounds are fitted to them unless
-    given (those of the tight rows: a tree without loose rows).
+    computed here when neither it nor ``stored`` is given; the node bounds
+    are fitted to them unless given (those of the tight rows: a tree
+    without loose rows).  The tree keeps them as :func:`stored_cull` gives
+    them, in float32, in arrays from ``empty(shape, dtype)``; a tree of
+    unrounded hulls of points alone may give those rows (``stored``)
+    instead of ``cull``, having dropped the float64 ones.
     """
-    tight, loose = primitive_cull(kinds, params) if cull is None else cull
     kinds = readonly(kinds, np.int8)
     params = readonly(params, np.float64)
     child = readonly(child, np.int64)
     count = readonly(count, np.int64)
-    tight_ro = readonly(tight, np.float64)
-    bounds = readonly(refit(child, count, kinds, params, tight_ro) if bounds is None else bounds, np.float64)
+    if stored is not None:
+        tight = loose = tight_ro = readonly(stored, np.float32)
+    else:
+        tight, loose = primitive_cull(kinds, params) if cull is None else cull
+        same = loose is tight
+        tight = readonly(tight, np.float64)
+        loose = tight if same else loose
+        tight_ro = readonly(stored_cull(tight, empty), np.float32)
+    if bounds is None:
+        bounds = refit(child, count, kinds, params, tight, tight_ro)
+    bounds = readonly(bounds, np.float64)
     if loose is tight:
         loose_ro, loose_bounds = tight_ro, bounds
     else:
-        loose_ro = readonly(loose, np.float64)
-        loose_bounds = readonly(refit(child, count, kinds, params, loose_ro), np.float64)
+        loose = readonly(loose, np.float64)
+        loose_ro = readonly(stored_cull(loose, empty), np.float32)
+        loose_bounds = readonly(refit(child, count, kinds, params, loose, loose_ro), np.float64)
     return Tree(
         kinds=kinds,
         params=params,
@@ -558,7 +573,7 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     it), primitives of kind ``kind`` that are hulls of three points, without
     their parameters in the faces' order: the faces' boxes, slabs and
     hashes come from the vertices in one pass, and their parameters are
-    gathered once, in leaf order."""
+    gathered once, in leaf order, :data:`FACE_COLUMNS` wide."""
     vertices = readonly(vertices, np.float64)
     faces = readonly(faces, np.int64)
     n = len(faces)
@@ -567,7 +582,12 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     _faces(_FACE_ROWS, vertices, faces, _NO_ORDER, np.int64(kind), cull, hashes, _NO_PARAMS, n)
     kinds = np.full(n, kind, np.int8)
     if not _all_different(hashes):
-        return build_tree(kinds, face_params(vertices, faces), leaf_size)
+        return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)
     child, count, order, depth = _build(cull, int(leaf_size))
-    params = face_params(vertices, faces, order)
-    return assemble(kinds, params, order, child, count, depth, (cull, cull))
+    # The float32 rows the tree keeps, and the float64 ones dropped before
+    # the faces' rows are gathered and the nodes fitted (to the faces'
+    # points), which halves the build's peak.
+    stored = stored_cull(cull)
+    del cull, hashes
+    params = face_params(vertices, faces, order, FACE_COLUMNS)
+    return assemble(kinds, params, order, child, count, depth, stored=stored)

@@ -252,7 +252,7 @@ def forest(trees, loose=False):
     ro = readonly
     arrays = TreeArrays(
         ro(np.concatenate(kinds), np.int8), ro(np.concatenate(params), np.float64),
-        ro(np.concatenate(index), np.int64), ro(np.concatenate(cull), np.float64),
+        ro(np.concatenate(index), np.int64), ro(np.concatenate(cull), np.float32),
         ro(np.concatenate(bounds), np.float64), ro(np.concatenate(child), np.int64),
         ro(np.concatenate(count), np.int64),
     )  # fmt: skip

@@ -14,7 +14,7 @@ from numba import prange
 from .. import _pool, _threads, primitives
 from .._jit import inline, kernel
 from ._alloc import empty, empty_ints, readonly
-from .bounds import CULL_COLUMNS, plane_row
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
@@ -87,6 +87,34 @@ def _merge(bounds, i, rows, first, last):
             bounds[i, a] = min(bounds[i, a], rows[k, a])
             bounds[i, 3 + a] = max(bounds[i, 3 + a], rows[k, 3 + a])
             bounds[i, 6 + a] += rows[k, 6 + a]
+
+
+@inline
+def _merge_leaf(bounds, i, first, last, kinds, params, cull, normals, vertices):
+    """Leaf ``i``'s box and normal sum (columns 6-8) over its stored
+    primitives ``first .. last - 1``: the extremes of the points of those
+    that are hulls of points (their cull rows' boxes, exactly, where they
+    are not rounded), the boxes of the ``cull`` rows of the others; the
+    normals of their ``normals`` rows (the tree's float32 ones, which a
+    tree of hulls alone keeps instead of its float64 ``cull`` rows)."""
+    rounded = params.shape[1] > N_PARAMS
+    for a in range(3):
+        bounds[i, a] = math.inf
+        bounds[i, 3 + a] = -math.inf
+        bounds[i, 6 + a] = 0.0
+    for k in range(first, last):
+        n = vertices[kinds[k]]
+        if n > 0 and not rounded:
+            for c in range(n):
+                for a in range(3):
+                    bounds[i, a] = min(bounds[i, a], params[k, 3 * c + a])
+                    bounds[i, 3 + a] = max(bounds[i, 3 + a], params[k, 3 * c + a])
+        else:
+            for a in range(3):
+                bounds[i, a] = min(bounds[i, a], cull[k, a])
+                bounds[i, 3 + a] = max(bounds[i, 3 + a], cull[k, 3 + a])
+        for a in range(3):
+            bounds[i, 6 + a] += normals[k, 6 + a]
 
 
 @inline
@@ -176,7 +204,7 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
 
 
 @inline
-def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, vertices):
+def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, normals, vertices):
     """Every node of the subtree at ``root``: boxes and normal sums from the
     leaves up, then, but for ``root`` itself, its frame and slab ranges."""
     # A subtree over c primitives has at most 2 c - 1 nodes.
@@ -200,7 +228,7 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, ve
         if count[i] > 0:
             start[i] = child[i]
             end[i] = child[i] + count[i]
-            _merge(bounds, i, cull, start[i], end[i])
+            _merge_leaf(bounds, i, start[i], end[i], kinds, params, cull, normals, vertices)
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
@@ -373,7 +401,9 @@ _TASKS, _SUBTREES, _TOP, _FRAMES = 0, 1, 2, 3
 
 
 @kernel(nogil=True)
-def _fit_step(step, lo, hi, bounds, top, tasks, start, end, child, count, kinds, params, cull, vertices):
+def _fit_step(
+    step, lo, hi, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, vertices
+):
     """One step of :func:`refit` on the tasks ``lo .. hi - 1``: one kernel for
     every step, so that a first build compiles one.  Returns ``(n_top,
     n_tasks)`` for ``_TASKS`` (:func:`_refit_top`), else zeros.
@@ -387,7 +417,7 @@ def _fit_step(step, lo, hi, bounds, top, tasks, start, end, child, count, kinds,
         return _refit_top(child, count, top, tasks, start, end)
     if step == _SUBTREES:
         for j in range(lo, hi):
-            _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, vertices)
+            _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, normals, vertices)
     elif step == _TOP:
         for t in range(top.shape[0] - 1, -1, -1):
             _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
@@ -399,22 +429,28 @@ def _fit_step(step, lo, hi, bounds, top, tasks, start, end, child, count, kinds,
     return 0, 0
 
 
-def _tasks(bounds, child, count, kinds, params, cull):
+def _tasks(bounds, child, count, kinds, params, cull, normals):
     """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length.
 
-    ``params`` and ``cull`` are passed read-only whatever they are, so that
-    a refit and the first fit call the kernel with the same types."""
+    ``params``, ``cull`` and ``normals`` are passed read-only whatever they
+    are, so that a refit and the first fit call the kernel with the same
+    types."""
     m = len(child)
     top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
-    params, cull = readonly(params, np.float64), readonly(cull, np.float64)
     n_top, n_tasks = _fit_step(
-        _TASKS, 0, 0, bounds, top, tasks, start, end, child, count, kinds, params, cull, _VERTICES
+        _TASKS, 0, 0, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, _VERTICES
     )
     return top[:n_top], tasks[:n_tasks], start, end
 
 
-def refit(child, count, kinds, params, cull):
+def refit(child, count, kinds, params, cull, normals=None):
     """Node boxes and slabs, ``(m, NODE_COLUMNS)``, over the stored primitives.
+
+    ``cull`` are their cull rows, whose boxes bound the primitives that are
+    not unrounded hulls of points (those are bounded by their points);
+    ``normals`` the rows whose slab axes are summed into the nodes' ``u``
+    (``cull`` unless given: a tree passes its float32 rows, the same
+    whether it was built or unpickled).
 
     Each node has its box ``(lo, hi)`` and an oriented box, as three slabs
     ``(axis, h_min, h_max)``: ``u`` is the normalised sum of the primitives'
@@ -431,27 +467,45 @@ def refit(child, count, kinds, params, cull):
     Exact ranges cost O(primitives) per level of the tree; a refit
     (:func:`refit_faces`) merges them instead.
     """
+    normals = cull if normals is None else normals
     if len(child) == 1:
         # One leaf (brute force): the traversal goes straight to its
         # primitives and never tests its bounds, which need only its box,
         # the scale of the pruning tests; the slabs bound nothing.
         bounds = np.zeros((1, NODE_COLUMNS))
-        bounds[0, 0:3] = cull[:, 0:3].min(axis=0)
-        bounds[0, 3:6] = cull[:, 3:6].max(axis=0)
+        bounds[0, 0:6] = _leaf_box(kinds, params, cull)
         bounds[0, 9::5] = -math.inf
         bounds[0, 10::5] = math.inf
         return bounds
     bounds = empty(len(child), NODE_COLUMNS)
-    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull)
+    params = readonly(params, np.float64)
+    cull, normals = readonly(cull, cull.dtype), readonly(normals, normals.dtype)
+    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull, normals)
 
     def run(step, lo, hi):
-        _fit_step(step, lo, hi, bounds, top, tasks, start, end, child, count, kinds, params, cull, _VERTICES)
+        tree = (top, tasks, start, end, child, count, kinds, params, cull, normals)
+        _fit_step(step, lo, hi, bounds, *tree, _VERTICES)
 
     # Tasks differ in size by orders of magnitude: handed out one at a time.
     _threads.spread(lambda lo, hi: run(_SUBTREES, lo, hi), len(tasks))
     run(_TOP, 0, 0)
     _threads.spread(lambda lo, hi: run(_FRAMES, lo, hi), len(top) + len(tasks))
     return bounds
+
+
+def _leaf_box(kinds, params, cull):
+    """The box ``(lo, hi)`` of every stored primitive, as :func:`_merge_leaf` bounds them."""
+    lo, hi = np.full(3, math.inf), np.full(3, -math.inf)
+    rounded = params.shape[1] > N_PARAMS
+    for p in primitives.present(kinds):
+        rows = kinds == p.code
+        if p.vertices and not rounded:
+            points = params[rows, : 3 * p.vertices].reshape(-1, 3)
+            lo, hi = np.minimum(lo, points.min(axis=0)), np.maximum(hi, points.max(axis=0))
+        else:
+            lo = np.minimum(lo, cull[rows, 0:3].min(axis=0))
+            hi = np.maximum(hi, cull[rows, 3:6].max(axis=0))
+    return np.concatenate([lo, hi])
 
 
 def refit_faces(vertices, faces, order, child, count, kinds):
@@ -473,7 +527,7 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
     # over the memory of the frame before, once that mesh is gone, rather than
     # the system's fresh pages, whose first writes cost as much as the refit.
-    params = _pool.empty((len(order), N_PARAMS))
+    params = _pool.empty((len(order), FACE_COLUMNS))
     cull = _pool.empty((len(order), CULL_COLUMNS))
     vertices, faces, order = (
         readonly(vertices, np.float64),

@@ -42,11 +42,12 @@ TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bound
 Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature extra flag index undecided")
 
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
+_C2F32 = types.Array(types.float32, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
 _OUT1 = types.Array(types.float64, 1, "C")
 _OUT2 = types.Array(types.float64, 2, "C")
 _TREE = types.NamedTuple(
-    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1I, _C2F, _C2F, _C1I, _C1I], TreeArrays
+    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1I, _C2F32, _C2F, _C1I, _C1I], TreeArrays
 )
 _OUTPUTS = types.NamedTuple(
     [_OUT1, _OUT1, _OUT2, types.Array(types.int8, 1, "C"), _OUT2, types.Array(types.boolean, 1, "C"),

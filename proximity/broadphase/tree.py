@@ -17,7 +17,8 @@ class Tree:
     kinds : ndarray of int8, shape ``(n,)``
         The kind code of each stored primitive (see :mod:`proximity.primitives`).
     params : ndarray of float64, shape ``(n, N_PARAMS)``
-        Each stored primitive's parameters.
+        Each stored primitive's parameters (``FACE_COLUMNS`` wide in a tree
+        of faces alone, one wider with radii).
     index : ndarray of int64, shape ``(n,)``
         The caller's index of each stored primitive.
     child, count : ndarray of int64, shape ``(m,)``
@@ -27,9 +28,10 @@ class Tree:
         for brute force.
     bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
         Node boxes and oriented boxes (see :func:`refit`).
-    cull : ndarray of float64, shape ``(n, 11)``
-        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``.
-    loose_bounds, loose_cull : ndarray of float64
+    cull : ndarray of float32, shape ``(n, 11)``
+        Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``,
+        rounded outwards (:func:`~.bounds.stored_cull`).
+    loose_bounds, loose_cull : ndarray of float64, float32
         The same for ``eberly`` (the same arrays unless there are circles).
     depth : int
         Depth of the deepest leaf.
