@@ -131,7 +131,9 @@ def _array(dtype, ndim, readonly=True):
 
 
 _F1, _F2, _I1 = _array(types.float64, 1), _array(types.float64, 2), _array(types.int64, 1)
-_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _I1, _F2, _F2, _I1, _I1, _F2, _F2], PairTree)
+# The cull rows as trees keep them, in float32 (see proximity.broadphase.bounds.stored_cull).
+_C2 = _array(types.float32, 2)
+_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _I1, _C2, _F2, _I1, _I1, _F2, _F2], PairTree)
 _QUERIES = types.NamedTuple([_I1, _I1, _F1, _F1, _F1], Queries)
 _W1, _W2 = _array(types.float64, 1, False), _array(types.float64, 2, False)
 _WI, _W8 = _array(types.int64, 1, False), _array(types.int8, 1, False)
@@ -556,7 +558,7 @@ def forest(kinds, params):
     """A batch of primitives as a :class:`PairTree` of one-primitive leaves: node ``k`` holds
     primitive ``k``, bounded by its box and its slab; queries start at its leaves."""
     from ._alloc import readonly
-    from .bounds import primitive_cull
+    from .bounds import primitive_cull, stored_cull
 
     cull = primitive_cull(kinds, params)[0]
     n = len(kinds)
@@ -569,7 +571,8 @@ def forest(kinds, params):
     index, bounds = readonly(np.arange(n), np.int64), readonly(bounds, np.float64)
     child, count = readonly(np.arange(n), np.int64), readonly(np.ones(n), np.int64)
     frames, rep = node_arrays(kinds, params, bounds, child, count)
-    return PairTree(kinds, params, index, readonly(cull, np.float64), bounds, child, count, frames, rep)
+    stored = readonly(stored_cull(cull), np.float32)
+    return PairTree(kinds, params, index, stored, bounds, child, count, frames, rep)
 
 
 @functools.cache

@@ -429,6 +429,10 @@ def _fit_step(
     return 0, 0
 
 
+#: Cull rows of none: what :func:`_tasks` reads of them.
+_NO_ROWS = readonly(np.empty((0, CULL_COLUMNS), np.float32), np.float32)
+
+
 def _tasks(bounds, child, count, kinds, params, cull, normals):
     """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length.
 
@@ -538,7 +542,10 @@ def refit_faces(vertices, faces, order, child, count, kinds):
         _gather_faces(vertices, faces, order, params, cull)
         return params, cull, refit(child, count, kinds, params, cull)
     bounds = _pool.empty((len(child), NODE_COLUMNS))
-    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull)
+    # The tasks alone: rows of the types a mesh's first fit passes (float32
+    # cull rows), so that the kernel it compiled serves.
+    rows = readonly(params, np.float64)
+    top, tasks, start, end = _tasks(bounds, child, count, kinds, rows, _NO_ROWS, _NO_ROWS)
     with numba.parallel_chunksize(1):
         _fit_faces(
             vertices,
