@@ -66,7 +66,8 @@ def surface_points(p, c, d, r, rows_of):
         v = p - c
         v = v / np.max(np.abs(v), axis=-1, keepdims=True)
         v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-        point = np.where((r == 0)[..., None], c, c + v * r[..., None])
+        # Where P - c rounds to 0 (P on the core but for rounding), no direction.
+        point = np.where((r == 0)[..., None] | (p == c).all(axis=-1)[..., None], c, c + v * r[..., None])
         m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
         lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
     rows = np.flatnonzero(lost.reshape(-1))
