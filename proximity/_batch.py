@@ -16,6 +16,7 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+from numba import prange
 from numba.core import types
 
 from . import _counts, _pool
@@ -39,7 +40,7 @@ def _loop(handle, lo, hi, shape, P, n_j, out, exact, full):
     """
     n = out[0].shape[0]
     run = SPAN * BLOCK
-    for task in range(lo, hi):
+    for task in prange(lo, hi):
         k0 = task * run
         nb = min(run, n - k0)
         CALL(handle, shape, P, n_j, k0, nb, out, exact, full)
@@ -165,6 +166,7 @@ def batch_kernel(layout, block):
         layout.block_signature,
         functools.partial(_blocks, span * BLOCK),
         max(1, BATCH_GRAIN // span),
+        parallel=True,
         SPAN=span,
     )
 
