@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import _lazy, _threads
-from ._typing import ArrayLike, Distances, Transform
+from ._typing import ArrayLike, Distances
 from ._validate import as_float64, cutoff, freeze_result, frozen
 from .primitives import N_PARAMS
 from .results import attach
@@ -21,7 +21,6 @@ from .shapes import DEFAULT_METHOD, Frozen, check_method, keyword_only
 
 if TYPE_CHECKING:
     from .inflated import Inflated
-    from .posed import Posed
     from .results import Result
 
 BROAD_PHASES = ("auto", "brute", "bvh")
@@ -160,21 +159,6 @@ class Collection(Frozen):
             away = (points - out["point"]) / distance[:, None]
         fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
         out["normal"] = outward(out["point"], on_core, radius, fallback)
-
-    def transformed(self, transform: Transform) -> Posed:
-        """The shape moved by the rigid ``transform`` (4x4), as a view that
-        shares its data: :class:`proximity.Posed`, in O(1).
-
-        Examples
-        --------
-        >>> import numpy as np, proximity
-        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
-        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
-        2.0
-        """
-        from .posed import Posed
-
-        return Posed(self, transform)
 
     def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the collection's surface: a thick

@@ -39,13 +39,12 @@ import numpy as np
 
 from . import primitives
 from ._rounding import certify_difference, outward, spindle_points, surface_points
-from ._typing import ArrayLike, Bools, Distances, Floats, Transform
+from ._typing import ArrayLike, Bools, Distances, Floats
 from ._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
 from .results import asdict, beyond, format_repr
 from .shapes import DEFAULT_METHOD, Circle, Frozen, check_method, keyword_only
 
 if TYPE_CHECKING:
-    from .posed import Posed
     from .results import Result
     from .shapes import Shape
 
@@ -118,21 +117,6 @@ class Inflated(Frozen):
 
     def __repr__(self):
         return format_repr(self, ("radius",), core=self.core)
-
-    def transformed(self, transform: Transform) -> Posed:
-        """The shape moved by the rigid ``transform`` (4x4), as a view that
-        shares its data: :class:`proximity.Posed`, in O(1).
-
-        Examples
-        --------
-        >>> import numpy as np, proximity
-        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
-        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
-        2.0
-        """
-        from .posed import Posed
-
-        return Posed(self, transform)
 
     def inflated(self, radius: ArrayLike) -> Inflated:
         """The points within ``radius`` of this rounded shape: the core

@@ -111,7 +111,7 @@ def keyword_only(shape, function, args):
 
 
 class Frozen:
-    """Immutability, pickling and per-class names, shared by every shape.
+    """Immutability, pickling, per-class names and posing, shared by every shape.
 
     Each concrete class gets its own copies of the public methods it
     inherits, named after it, so that Python's own argument errors name the
@@ -138,6 +138,21 @@ class Frozen:
             copy.__qualname__ = f"{cls.__name__}.{name}"
             copy.__module__ = cls.__module__
             setattr(cls, name, copy)
+
+    def transformed(self, transform: Transform) -> Posed:
+        """The shape moved by the rigid ``transform`` (4x4), as a view that
+        shares its data: :class:`proximity.Posed`, in O(1).
+
+        Examples
+        --------
+        >>> import numpy as np, proximity
+        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
+        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
+        2.0
+        """
+        from .posed import Posed
+
+        return Posed(self, transform)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable")
@@ -210,21 +225,6 @@ class _Facade(Frozen):
             array = getattr(self, name)
             args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
         return type(self)(*args)
-
-    def transformed(self, transform: Transform) -> Posed:
-        """The shape moved by the rigid ``transform`` (4x4), as a view that
-        shares its data: :class:`proximity.Posed`, in O(1).
-
-        Examples
-        --------
-        >>> import numpy as np, proximity
-        >>> T = np.eye(4); T[:3, 3] = [10, 0, 0]
-        >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
-        2.0
-        """
-        from .posed import Posed
-
-        return Posed(self, transform)
 
     def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the shape: a rounded solid
