@@ -204,9 +204,9 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
 
 
 @inline
-def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, normals, vertices):
-    """Every node of the subtree at ``root``: boxes and normal sums from the
-    leaves up, then, but for ``root`` itself, its frame and slab ranges."""
+def _subtree_nodes(root, start, end, child, count):
+    """``(nodes, n)``: the ``n`` nodes of the subtree at ``root``, each before
+    its descendants (``start[root]``, ``end[root]`` its range of primitives)."""
     # A subtree over c primitives has at most 2 c - 1 nodes.
     nodes = np.empty(2 * (end[root] - start[root]), np.int64)
     stack = np.empty(2 * (end[root] - start[root]), np.int64)
@@ -222,6 +222,14 @@ def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, no
             stack[sp] = child[i] + 1
             stack[sp + 1] = child[i]
             sp += 2
+    return nodes, n
+
+
+@inline
+def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, normals, vertices):
+    """Every node of the subtree at ``root``: boxes and normal sums from the
+    leaves up, then, but for ``root`` itself, its frame and slab ranges."""
+    nodes, n = _subtree_nodes(root, start, end, child, count)
     # A node comes before its descendants: backwards, they are done first.
     for t in range(n - 1, -1, -1):
         i = nodes[t]
@@ -317,20 +325,7 @@ def _ranges_merged(bounds, i, child):
 def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices):
     """:func:`_fit_subtree` with the ranges of nodes above the leaves from
     their children's (:func:`_ranges_merged`), children first."""
-    nodes = np.empty(2 * (end[root] - start[root]), np.int64)
-    stack = np.empty(2 * (end[root] - start[root]), np.int64)
-    n = 0
-    stack[0] = root
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        i = stack[sp]
-        nodes[n] = i
-        n += 1
-        if count[i] == 0:
-            stack[sp] = child[i] + 1
-            stack[sp + 1] = child[i]
-            sp += 2
+    nodes, n = _subtree_nodes(root, start, end, child, count)
     for t in range(n - 1, -1, -1):
         i = nodes[t]
         if count[i] > 0:
