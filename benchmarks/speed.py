@@ -324,7 +324,8 @@ base = rss("VmRSS:")
 with open("/proc/self/clear_refs", "w") as f:
     f.write("5")  # reset the peak to the current size
 r = shape.closest_point(points)
-out = sum(np.asarray(v).nbytes for v in vars(r).values())
+# The result's fields (not the query a lazy normal keeps).
+out = sum(np.asarray(v).nbytes for v in proximity.results.asdict(r).values())
 print(base, rss("VmHWM:"), out)
 """
 

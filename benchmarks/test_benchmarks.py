@@ -144,3 +144,12 @@ def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
             got, checked = pairs.exact_distance(va, fa, posed, fb, max(gap, 0.0) + 0.01)
             assert got == expected and checked < len(fa) * len(fb)
         assert (expected == 0) == (gap < 0)
+
+
+def test_the_memory_row_measures_a_query_in_a_fresh_process():
+    from benchmarks.speed import memory_row
+
+    row = memory_row(10_000)
+    # The outputs of 10,000 closest points: distance, squared distance, point, feature, barycentrics.
+    assert row["baseline"] * 2**20 == 10_000 * (8 + 8 + 24 + 1 + 24)
+    assert row["ours"] >= row["baseline"]
