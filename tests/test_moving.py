@@ -145,13 +145,20 @@ def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
         T[:3, :3] += skew * np.random.default_rng(k).normal(size=(3, 3))
         poses.append(T)
     scene = proximity.Scene([mesh.transformed(T) for T in poses])
-    points = np.random.default_rng(5).normal(size=(3000, 3)) * 5
+    # Enough points to be queried in spatial order, in blocks that each keep
+    # only the instances near them.
+    points = np.random.default_rng(5).normal(size=(6000, 3)) * 5
     got = scene.closest_point(points)
     each = np.array([mesh.transformed(T).distance(points) for T in poses])
     least = each.min(axis=0)
     np.testing.assert_array_equal(got.distance, least)
     first = np.argmax(each == least, axis=0)
     np.testing.assert_array_equal(got.source, first)
+    near = scene.distance(points, max_distance=0.5)
+    np.testing.assert_array_equal(near, np.where(least <= 0.5, least, np.inf))
+    exact = scene.distance(points[:500], method="certified")
+    each = np.array([mesh.transformed(T).distance(points[:500], method="certified") for T in poses])
+    np.testing.assert_array_equal(exact, each.min(axis=0))
 
 
 _TETRAHEDRON = (

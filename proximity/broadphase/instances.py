@@ -19,6 +19,13 @@ are the same in every frame (the poses are rigid, within
 the answer; ties go to the lowest index, the instances numbering their
 primitives one after the other.
 
+Each block of points (consecutive in space) first keeps only the instances
+that can hold the nearest primitive of some point of the block: those whose
+lower bound over the block's box is at most the block's upper bound, the
+least over the instances of the farthest reach of their spheres from the
+block's box (every primitive lies in its instance's sphere).  The points
+then choose among those few.
+
 The bounds are lowered by a slack before they are compared: ``2^-40``
 (:data:`BOX_SLACK`), far above the rounding of the moved boxes and
 spheres, plus four times the instance's ``max |R^T R - I|``, which covers
@@ -35,7 +42,7 @@ import numpy as np
 from numba.core import types
 
 from .. import primitives
-from .._jit import launcher, specialize
+from .._jit import launcher, part, specialize
 from ._alloc import readonly
 from .traverse import _C1I, _C2F, _OUTPUTS, _TREE, BLOCK, NONE, SEARCH_GRAIN, Outputs, TreeArrays, descent
 
@@ -85,6 +92,8 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     stack_sqr = np.empty(depth + 1)
     lower = np.empty(m)
     visit = np.empty(m, np.int64)
+    pick = np.empty(m, np.int64)
+    near = _block_instances(block, inst, points, order, cutoff, lower)
     # The previous point's closest point, in the world: its distance bounds
     # the next point's answer (points come in spatial order), as in
     # :func:`.traverse._search_block`.
@@ -100,37 +109,50 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
         finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
         if finite:
             size = max(max(abs(px), abs(py)), abs(pz))
-            # Each instance's lower bound, less its slack (see the module docstring).
-            for a in range(m):
-                b = inst.box[a]
-                dx = max(max(b[0] - px, px - b[3]), 0.0)
-                dy = max(max(b[1] - py, py - b[4]), 0.0)
-                dz = max(max(b[2] - pz, pz - b[5]), 0.0)
-                c = inst.sphere[a]
-                sx, sy, sz = px - c[0], py - c[1], pz - c[2]
-                low = max(
-                    math.sqrt(dx * dx + dy * dy + dz * dz), math.sqrt(sx * sx + sy * sy + sz * sz) - c[3]
-                )
-                slack = inst.slack[a]
-                lower[a] = (low - slack * max(size, b[6])) / (1.0 + slack)
-                visit[a] = 0
             cap = cutoff
             if SEED_POINT and not math.isnan(near_x):
                 dx, dy, dz = px - near_x, py - near_y, pz - near_z
                 cap = min(cap, math.sqrt(dx * dx + dy * dy + dz * dz) * (1.0 + BOX_SLACK) + BOX_SLACK * size)
+            limit = max(cap, 0.0)
+            # Each instance's lower bound, less its slack (see the module
+            # docstring), for those whose sphere alone does not put them
+            # beyond the cap (a comparison of squares, raised by 2^-40 over
+            # the rounding of the bound, so that no instance the loop below
+            # would visit is left out).
+            found = 0
+            for q in range(near.shape[0]):
+                a = near[q]
+                b = inst.box[a]
+                c = inst.sphere[a]
+                slack = inst.slack[a]
+                margin = slack * max(size, b[6])
+                sx, sy, sz = px - c[0], py - c[1], pz - c[2]
+                centre = sx * sx + sy * sy + sz * sz
+                reach = (limit * (1.0 + slack) + margin + c[3]) * (1.0 + BOX_SLACK)
+                if centre > reach * reach:
+                    continue
+                dx = max(max(b[0] - px, px - b[3]), 0.0)
+                dy = max(max(b[1] - py, py - b[4]), 0.0)
+                dz = max(max(b[2] - pz, pz - b[5]), 0.0)
+                low = max(math.sqrt(dx * dx + dy * dy + dz * dz), math.sqrt(centre) - c[3])
+                lower[found] = (low - margin) / (1.0 + slack)
+                pick[found] = a
+                visit[found] = 0
+                found += 1
             while True:
                 # The nearest instance not yet visited: the first descent
                 # usually finds the answer, after which few bounds are below it.
                 bound = max(min(min(best, upper), cap), 0.0)
-                a = -1
+                q = -1
                 low = math.inf
-                for c in range(m):
+                for c in range(found):
                     if visit[c] == 0 and lower[c] < low:
-                        a = c
+                        q = c
                         low = lower[c]
-                if a < 0 or low > bound:
+                if q < 0 or low > bound:
                     break
-                visit[a] = 1
+                visit[q] = 1
+                a = pick[q]
                 r = inst.rotation[a]
                 t = inst.translation[a]
                 tx, ty, tz = px - t[0], py - t[1], pz - t[2]
@@ -192,6 +214,61 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
             extra[i, 2] = w_a2
             flag[i] = w_flag
             prim[i] = best_index
+
+
+@part
+def _block_instances(block, inst, points, order, cutoff, scratch):
+    """The instances that may hold the nearest primitive of a finite point of
+    ``block``, in increasing order (see the module docstring); ``scratch``
+    holds one float a instance."""
+    n = points.shape[0]
+    m = inst.prototype.shape[0]
+    lo_x, lo_y, lo_z = math.inf, math.inf, math.inf
+    hi_x, hi_y, hi_z = -math.inf, -math.inf, -math.inf
+    for j in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
+        i = order[j]
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+            lo_x, lo_y, lo_z = min(lo_x, px), min(lo_y, py), min(lo_z, pz)
+            hi_x, hi_y, hi_z = max(hi_x, px), max(hi_y, py), max(hi_z, pz)
+    if not lo_x <= hi_x:
+        return np.empty(0, np.int64)
+    size = max(max(max(-lo_x, hi_x), max(-lo_y, hi_y)), max(-lo_z, hi_z))
+    # Every point of the box is within reach of every primitive of an
+    # instance: the farthest corner from its sphere's centre, plus its
+    # radius, raised by its slack.
+    reach = cutoff
+    for a in range(m):
+        c = inst.sphere[a]
+        fx = max(abs(lo_x - c[0]), abs(hi_x - c[0]))
+        fy = max(abs(lo_y - c[1]), abs(hi_y - c[1]))
+        fz = max(abs(lo_z - c[2]), abs(hi_z - c[2]))
+        slack = inst.slack[a]
+        far = math.sqrt(fx * fx + fy * fy + fz * fz) + c[3]
+        reach = min(reach, (far + slack * max(size, inst.box[a, 6])) * (1.0 + slack))
+    # The lower bound of each instance over the box, lowered as a point's is.
+    count = 0
+    for a in range(m):
+        b = inst.box[a]
+        dx = max(max(b[0] - hi_x, lo_x - b[3]), 0.0)
+        dy = max(max(b[1] - hi_y, lo_y - b[4]), 0.0)
+        dz = max(max(b[2] - hi_z, lo_z - b[5]), 0.0)
+        c = inst.sphere[a]
+        sx = max(max(lo_x - c[0], c[0] - hi_x), 0.0)
+        sy = max(max(lo_y - c[1], c[1] - hi_y), 0.0)
+        sz = max(max(lo_z - c[2], c[2] - hi_z), 0.0)
+        low = max(math.sqrt(dx * dx + dy * dy + dz * dz), math.sqrt(sx * sx + sy * sy + sz * sz) - c[3])
+        slack = inst.slack[a]
+        scratch[a] = (low - slack * max(size, b[6])) / (1.0 + slack)
+        if not scratch[a] > reach:
+            count += 1
+    near = np.empty(count, np.int64)
+    count = 0
+    for a in range(m):
+        if not scratch[a] > reach:
+            near[count] = a
+            count += 1
+    return near
 
 
 def _loop(handle, lo, hi, forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff):
