@@ -273,9 +273,11 @@ def closest_points(
         :class:`Sphere`, :class:`Capsule`).  Batches broadcast against each
         other like points against a shape: ``(N,)`` segments with ``(N,)``
         triangles give N pairs, ``(M,)`` with ``(N, 1)`` all ``N x M``
-        pairs; a mesh or a scene is one shape.  Disks and circles pair with
-        points only, and a scene of posed meshes (instances) is not searched
-        (``NotImplementedError`` naming the argument).
+        pairs; a mesh or a scene is one shape.  A scene of posed meshes or
+        scenes (instances) answers with the least over its members, each
+        searched in place with the best distance so far as its cutoff.
+        Disks and circles pair with points only (``NotImplementedError``
+        naming the pair).
     method : {"robust", "certified"}, keyword-only
         ``robust`` (default) is within ``16 eps S + 2^-1075`` of the exact
         distance, ``S`` the largest coordinate difference between the

@@ -52,14 +52,8 @@ class _Side:
             core, self.radius = shape.core, shape.radius
         self.core = core
         self.collection = hasattr(core, "_tree")
-        if self.collection and getattr(core, "shapes", None) is not None:
-            from .posed import Posed
-
-            if any(isinstance(s, Posed) for s in core.shapes):
-                raise NotImplementedError(
-                    f"{name} is a scene of posed meshes or scenes (instances), which pair queries do not "
-                    "search; pose the scene itself (scene.transformed(T)) or build it of unposed shapes"
-                )
+        if getattr(core, "_instanced", None) is not None:
+            raise TypeError(f"{name}: a scene of instances is searched part by part (see _pair_instances)")
         self.primitive = getattr(core, "_primitive", None)
         if not self.collection and self.primitive is None:
             raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
@@ -106,10 +100,8 @@ def _unposed(shape, name):
             radius, core = core.radius, core.core
     if rotation is None:
         return shape, None, None
-    if type(core) is Scene and any(isinstance(s, Posed) for s in core.shapes):
-        raise NotImplementedError(
-            f"{name} is a posed scene of posed meshes or scenes (instances), which pair queries do not search"
-        )
+    if type(core) is Scene and core._instanced is not None:
+        raise TypeError(f"{name}: a scene of instances is searched part by part (see _pair_instances)")
     if type(core) in (Triangle, Segment):
         core = type(core)(to_world(core.vertices, rotation, translation))
         rotation = translation = None
@@ -522,6 +514,25 @@ def _fast_for(a, b, method):
     return fast
 
 
+def _instances(query, a, b, method, max_distance, pose_b, signed):
+    """The pair where a side is a scene of instances, part by part
+    (:mod:`proximity._pair_instances`); None where neither side is one."""
+    pi = _lazy.load("proximity._pair_instances")
+    key = "a" if pi.unwrapped(a) is not None else "b" if pi.unwrapped(b) is not None else None
+    if key is None:
+        return None
+    if pose_b is not None:
+        b, pose_b = b.transformed(pose_b), None
+    cutoff = None if max_distance is None else _check_max_distance(max_distance)
+    other = b if key == "a" else a
+    single = getattr(other, "batch_shape", None) == ()
+
+    def one(x, y, max_distance):
+        return query(x, y, method=method, max_distance=max_distance)
+
+    return pi.least(one, a, b, key, single, cutoff, signed)
+
+
 def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None):
     """Closest points of two shapes; see :func:`proximity.closest_points`."""
     if args:
@@ -529,6 +540,9 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
             "closest_points() takes two positional arguments, a and b; method is keyword-only: "
             f"closest_points(a, b, method={args[0]!r})"
         )
+    found = _instances(closest_points, a, b, method, max_distance, pose_b, False)
+    if found is not None:
+        return found
     if max_distance is None and pose_b is None:
         fast = _fast_for(a, b, method)
         if fast is not None:
@@ -591,6 +605,9 @@ def _result(values, out_shape):
 
 def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """The distance between two shapes; see :func:`proximity.distance`."""
+    found = _instances(distance, a, b, method, max_distance, pose_b, True)
+    if found is not None:
+        return found
     if max_distance is None and pose_b is None:
         fast = _fast_for(a, b, method)
         if fast is not None:
@@ -606,6 +623,9 @@ def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
 
 def signed_distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """``d - r_a - r_b``: negative where two rounded shapes overlap; see :func:`proximity.signed_distance`."""
+    found = _instances(signed_distance, a, b, method, max_distance, pose_b, True)
+    if found is not None:
+        return found
     a, b, pose_b, swap, _ = _poses(a, b, pose_b)
     names = ("b", "a") if swap else ("a", "b")
     out_shape, _, _, out = _answer(a, b, method, max_distance, False, names, pose_b)
