@@ -117,7 +117,7 @@ _SPLIT = {(1, 1): _split_1_1, (1, 3): _split_1_3, (3, 3): _split_3_3}
 
 # The pair's scalar functions: ``robust`` and ``robust_unscaled`` (no
 # status), the per-method query of two tuples (status first).
-ROBUST = UNSCALED = QUERY = None
+ROBUST = UNSCALED = QUERY = TOUCHING = None
 # The arguments of each side, from scratch and from stored rows.
 AT_A = AT_B = TAKE_A = TAKE_B = None
 # Widths of the sides' rows, and the number of their parameters in the answer.
@@ -390,6 +390,28 @@ def row_query(pair, method):
         return specialize(_point_row, f"{pair.name}__{method.name}", role="inline", ROW=row)
     tag = f"{pair.module}__{method.name}"
     return specialize(_kernel_row, tag, role="inline", **_bindings(pair, method))
+
+
+def touch_row(pair):
+    """``f(kind_a, qa, ka, kind_b, qb, kb, fa, fb)``: ``pair``'s certified answer on stored
+    rows (as :func:`row_query`'s) where its robust features ``fa``, ``fb`` cross and its
+    primitives certainly intersect (distance 0), a request for the exact fallback
+    elsewhere; None where its module has no such query (``touching``)."""
+    if pair.swapped or pair.point or not hasattr(pair.kernels, "touching"):
+        return None
+    from .methods import CERTIFIED
+
+    bindings = _bindings(pair, CERTIFIED)
+    bindings["TOUCHING"] = pair.kernels.touching
+    return specialize(_touch_row, f"{pair.module}__touching", role="inline", **bindings)
+
+
+def _touch_row(kind_a, qa, ka, kind_b, qb, kb, fa, fb):
+    """``TOUCHING`` on stored rows ``qa[ka]``, ``qb[kb]`` (see :func:`touch_row`)."""
+    r = TOUCHING(int(fa), int(fb), *TAKE_A(qa, ka), *TAKE_B(qb, kb))
+    ea, eb = SPLIT(r[11:])
+    return (r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], float(r[9]), float(r[10]),
+            ea[0], ea[1], ea[2], eb[0], eb[1], eb[2])  # fmt: skip
 
 
 #: Candidate pairs per SIMD pass of the descent (:func:`candidates`).

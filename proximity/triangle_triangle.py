@@ -465,6 +465,65 @@ def _dd_scale3(t, f1, f2):
     return (x, y, z), o1 & o2 & o3
 
 
+@inline
+def _exact_frame(args):
+    """``(ok, zero, a, b, w, lw, ga, gb, scale)`` of a certified query: the vertices, the
+    exact differences as double-doubles (scaled where their leads would under- or
+    overflow), their leads ``lw``, the edges, and the scale undone at the end; ``ok`` False
+    where a difference overflowed, ``zero`` where every difference is 0."""
+    a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z = args
+    a = ((a0x, a0y, a0z), (a1x, a1y, a1z), (a2x, a2y, a2z))
+    b = ((b0x, b0y, b0z), (b1x, b1y, b1z), (b2x, b2y, b2z))
+    w = (
+        (_dd_sub(b[0], a[0]), _dd_sub(b[1], a[0]), _dd_sub(b[2], a[0])),
+        (_dd_sub(b[0], a[1]), _dd_sub(b[1], a[1]), _dd_sub(b[2], a[1])),
+        (_dd_sub(b[0], a[2]), _dd_sub(b[1], a[2]), _dd_sub(b[2], a[2])),
+    )
+    ga = (_dd_sub(a[1], a[0]), _dd_sub(a[2], a[1]), _dd_sub(a[0], a[2]))
+    gb = (_dd_sub(b[1], b[0]), _dd_sub(b[2], b[1]), _dd_sub(b[0], b[2]))
+    lw = (_lead3(w[0]), _lead3(w[1]), _lead3(w[2]))
+    m = _largest(lw, _lead3(ga), _lead3(gb))
+    ok = m < math.inf  # a difference of two finite coordinates overflowed otherwise
+    scale = 1.0
+    if ok and m != 0.0 and (m < SAFE_MIN or m > SAFE_MAX):
+        f1, f2 = pow2_scale(m)
+        w0, o0 = _dd_scale3(w[0], f1, f2)
+        w1, o1 = _dd_scale3(w[1], f1, f2)
+        w2, o2 = _dd_scale3(w[2], f1, f2)
+        ga, o3 = _dd_scale3(ga, f1, f2)
+        gb, o4 = _dd_scale3(gb, f1, f2)
+        w = (w0, w1, w2)
+        scale = (1.0 / f1) * (1.0 / f2)
+        ok = o0 & o1 & o2 & o3 & o4 & (scale < math.inf)
+        lw = (_lead3(w[0]), _lead3(w[1]), _lead3(w[2]))
+    return ok, m == 0.0, a, b, w, lw, ga, gb, scale
+
+
+@inline
+def _crossing_features(fa, fb):
+    """Whether the robust features are an edge of one triangle crossing the other's face."""
+    return ((fa == FACE) & (fb != FACE) & (fb > VERTEX2)) | ((fb == FACE) & (fa != FACE) & (fa > VERTEX2))
+
+
+@inline
+def _touching(fa, fb, a, b, lw, lga, lgb, scale):
+    """``(found, answer)``: where the robust features are an edge crossing a face and the
+    triangles certainly intersect, the certified answer (distance 0, the crossing point as
+    both witnesses, the lowest crossing pair); ``found`` False otherwise."""
+    side, k = (-1, -1)
+    if _crossing_features(fa, fb):
+        side, k = _intersection(lw, lga, lgb)
+    if side < 0:
+        return False, _FAIL
+    # The crossing point, as the robust method computes it, for both witnesses.
+    c = _crossing_a(lw, lga, lgb, k) if side == 0 else _crossing_b(lw, lga, lgb, k)
+    touching = (0.0, *c[1:])
+    q = _finish(touching, (scale, scale, 1.0), a, b)
+    fa = EDGE01 + k if side == 0 else FACE
+    fb = FACE if side == 0 else EDGE01 + k
+    return True, (cf.CERTAIN, 0.0, 0.0, q[2], q[3], q[4], q[2], q[3], q[4], fa, fb, *q[10:])
+
+
 @part
 def certified(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z):
     """Certified triangle-triangle query for any finite input, or a request
@@ -478,48 +537,15 @@ def certified(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b
     """
     args = (a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z)
     r = robust(*args)
-    fa, fb = r[8], r[9]
-    a = ((a0x, a0y, a0z), (a1x, a1y, a1z), (a2x, a2y, a2z))
-    b = ((b0x, b0y, b0z), (b1x, b1y, b1z), (b2x, b2y, b2z))
-    w = (
-        (_dd_sub(b[0], a[0]), _dd_sub(b[1], a[0]), _dd_sub(b[2], a[0])),
-        (_dd_sub(b[0], a[1]), _dd_sub(b[1], a[1]), _dd_sub(b[2], a[1])),
-        (_dd_sub(b[0], a[2]), _dd_sub(b[1], a[2]), _dd_sub(b[2], a[2])),
-    )
-    ga = (_dd_sub(a[1], a[0]), _dd_sub(a[2], a[1]), _dd_sub(a[0], a[2]))
-    gb = (_dd_sub(b[1], b[0]), _dd_sub(b[2], b[1]), _dd_sub(b[0], b[2]))
-    lw = (_lead3(w[0]), _lead3(w[1]), _lead3(w[2]))
-    m = _largest(lw, _lead3(ga), _lead3(gb))
-    if not m < math.inf:
-        return _FAIL  # a difference of two finite coordinates overflowed
-    if m == 0.0:
+    ok, zero, a, b, w, lw, ga, gb, scale = _exact_frame(args)
+    if not ok:
+        return _FAIL
+    if zero:
         return (cf.CERTAIN, *r)
-    scale = 1.0
-    if m < SAFE_MIN or m > SAFE_MAX:
-        f1, f2 = pow2_scale(m)
-        w0, o0 = _dd_scale3(w[0], f1, f2)
-        w1, o1 = _dd_scale3(w[1], f1, f2)
-        w2, o2 = _dd_scale3(w[2], f1, f2)
-        ga, o3 = _dd_scale3(ga, f1, f2)
-        gb, o4 = _dd_scale3(gb, f1, f2)
-        w = (w0, w1, w2)
-        scale = (1.0 / f1) * (1.0 / f2)
-        if not (o0 & o1 & o2 & o3 & o4 & (scale < math.inf)):
-            return _FAIL
-        lw = (_lead3(w[0]), _lead3(w[1]), _lead3(w[2]))
+    fa, fb = r[8], r[9]
     lga, lgb = _lead3(ga), _lead3(gb)
-    crossing = ((fa == FACE) & (fb != FACE) & (fb > VERTEX2)) | ((fb == FACE) & (fa != FACE) & (fa > VERTEX2))
-    if crossing:
-        side, k = _intersection(lw, lga, lgb)
-        if side < 0:
-            return _FAIL
-        # The crossing point, as the robust method computes it, for both witnesses.
-        c = _crossing_a(lw, lga, lgb, k) if side == 0 else _crossing_b(lw, lga, lgb, k)
-        touching = (0.0, *c[1:])
-        q = _finish(touching, (scale, scale, 1.0), a, b)
-        fa = EDGE01 + k if side == 0 else FACE
-        fb = FACE if side == 0 else EDGE01 + k
-        return cf.CERTAIN, 0.0, 0.0, q[2], q[3], q[4], q[2], q[3], q[4], fa, fb, *q[10:]
+    if _crossing_features(fa, fb):
+        return _touching(fa, fb, a, b, lw, lga, lgb, scale)[1]
     if not _verify(fa, fb, lw, lga, lgb):
         return _FAIL
     sh, sl, delta = _sqr(fa, fb, w, ga, gb)
@@ -530,3 +556,19 @@ def certified(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b
         return _FAIL
     pb = (r[2], r[3], r[4]) if d == 0.0 else (r[5], r[6], r[7])
     return cf.CERTAIN, d, sqr * scale * scale, r[2], r[3], r[4], pb[0], pb[1], pb[2], fa, fb, *r[10:]
+
+
+@part
+def touching(
+    fa, fb, a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z
+):
+    """:func:`certified` where the robust features ``fa``, ``fb`` are an edge crossing a face
+    and the triangles certainly intersect (distance exactly 0, the crossing point on both),
+    and a request for the exact fallback everywhere else: what the ``robust`` search of two
+    meshes asks of a pair it finds within rounding of 0, so that intersecting meshes give 0
+    without compiling the whole certified query into it."""
+    args = (a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z)
+    ok, zero, a, b, w, lw, ga, gb, scale = _exact_frame(args)
+    if not ok or zero:
+        return _FAIL
+    return _touching(fa, fb, a, b, lw, _lead3(ga), _lead3(gb), scale)[1]

@@ -28,7 +28,11 @@ least computed answer over all pairs of primitives, ties to the lowest
 (one per node) bound the answer from above from the first levels on.  One
 exception, for speed: a search without rounded rows stops at the first
 pair found at distance 0 (no pair can be nearer), which need not be the
-lowest such pair.
+lowest such pair.  Intersecting primitives rarely compute to exactly 0
+(the crossing point is rounded), so the robust search certifies a pair it
+finds within ``64 eps M`` of 0: where it certainly intersects, its answer
+is the certified one, exactly 0 with the crossing point on both sides, and
+the search stops there too.
 
 Evaluation
 ----------
@@ -108,7 +112,7 @@ _NOTHING = (math.nan,) * 9 + (-1.0, -1.0) + (math.nan,) * 6
 
 # Bound by specialize: the pair functions (chains over the pairs of kinds
 # present), the method's properties, the layout of the sides' rows.
-EVALUATE = CERTIFY = EVAL_BLOCK = None
+EVALUATE = CERTIFY = EVAL_BLOCK = TOUCHING = None
 EXACT_FALLBACK = False
 # Whether the pairs of primitives are evaluated CAP at a time by EVAL_BLOCK (SIMD), on
 # scratch of Z_ROWS rows, each side's row SIDE_A and SIDE_B values wide.
@@ -121,6 +125,9 @@ FINALISTS = 64
 POSED = False
 RADIUS_A = RADIUS_B = -1  # the column of each side's row radii, -1: none
 ZERO_STOPS = True
+#: Whether the robust search certifies a pair found within rounding of 0, so
+#: that intersecting primitives give exactly 0 and end it (no row radii).
+TOUCH = False
 UPPER = True  # whether points of the nodes bound the answer (no row radii)
 LOW = HIGH = 0
 ROW = NEXT = None
@@ -177,6 +184,18 @@ def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, w
     e = r[1] - radius
     ia, ib = A.index[ka], B.index[kb]
     if not EXACT_FALLBACK:
+        if TOUCH:
+            if r[1] != 0.0 and r[1] <= 64.0 * EPS * magnitude:
+                # Possibly touching: where the pair certainly intersects, its
+                # distance is exactly 0 and the search ends (see the module docstring).
+                c = TOUCHING(A.kinds[ka], A.params, ka, B.kinds[kb], tb, 0, r[9], r[10])
+                if c[0] == certified.CERTAIN and c[1] == 0.0:
+                    fs[0], fs[2], fs[3] = 0.0, ra, rb
+                    ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
+                    for k in range(17):
+                        win[k] = c[k]
+                    ist[5] |= 1
+                    return
         if e < fs[0] or (e == fs[0] and (ia < ist[0] or (ia == ist[0] and ib < ist[1]))):
             fs[0], fs[2], fs[3] = e, ra, rb
             ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
@@ -219,7 +238,7 @@ def _flush(z, n, cand, cand_r, q, A, B, queries, magnitude, fs, ist, win, fin, f
              z[first + 4, i], z[first + 5, i], z[first + 6, i], z[first + 7, i], z[first + 8, i],
              z[first + 9, i], z[first + 10, i], z[first + 11, i], z[first + 12, i], z[first + 13, i],
              z[first + 14, i], z[first + 15, i])  # fmt: skip
-        if EXACT_FALLBACK and ZERO_STOPS:
+        if (EXACT_FALLBACK and ZERO_STOPS) or (TOUCH and r[1] <= 64.0 * EPS * magnitude):
             pose_row(B.params, cand[i, 1], B.kinds[cand[i, 1]], pose, tb, posed)
         _consider(r, cand[i, 0], cand[i, 1], cand_r[i, 0], cand_r[i, 1], q, A, B, queries, magnitude,
                   fs, ist, win, fin, fin_lo, tb)  # fmt: skip
@@ -511,11 +530,17 @@ def descent_kernel(method, present, posed, radius_a, radius_b):
     names = "_".join(p.name for p in present)
     tag = f"{method.name}__{names}__{int(posed)}_{radius_a}_{radius_b}"
     pk = pairs_kernels()
+    touch_row = None
+    if not method.exact_fallback and radius_a < 0 and radius_b < 0 and len(present) == 1:
+        touch_row = pk.touch_row(present[0])
+    touch = touch_row is not None
     simd = len(present) == 1 and not present[0].point
     one_pair = present[0]
     bindings = dict(
         EVALUATE=_chain(present, ROBUST),
         CERTIFY=_chain(present, CERTIFIED) if method.exact_fallback else _chain(present, ROBUST),
+        TOUCH=touch,
+        TOUCHING=touch_row or specialize(_nothing, "nothing", role="inline"),
         EXACT_FALLBACK=method.exact_fallback,
         POSED=posed,
         RADIUS_A=radius_a,
