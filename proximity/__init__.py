@@ -371,8 +371,9 @@ def hausdorff_distance(
     *args: object,
     directed: bool = False,
     rtol: float = 1e-6,
+    atol: float = 0.0,
     method: str = DEFAULT_METHOD,
-    max_points: int = 1_000_000,
+    max_points: int = 250_000,
 ) -> HausdorffResult:
     """Hausdorff distance between two meshes, with certified lower and upper bounds.
 
@@ -399,16 +400,37 @@ def hausdorff_distance(
         (plus a rounding allowance of a few times the method's error bound,
         which is all that separates the bounds of meshes at distance 0).
         Finite and > 0; default 1e-6.
+    atol : float, keyword-only
+        An absolute gap that is enough as well: the search stops at
+        ``upper - lower <= max(rtol * upper, atol)``.  Finite and >= 0;
+        default 0.
     method : {"robust", "certified"}, keyword-only
         The point queries behind the bounds, whose error is allowed for:
         ``robust`` (default) by its documented bound, ``8 eps S + 2^-1075``
         per triangle (see ``docs/accuracy.md``); ``certified`` by one ulp
         (it is faithfully rounded).  The bounds are certified either way:
         ``lower <= H <= upper`` for the exact surfaces, the points of ``a``
-        computed in floating point being allowed for too.
+        computed in floating point being allowed for too.  ``certified``
+        runs its exact fallback for every point of ``a`` lying on ``b``,
+        which is slow where the surfaces coincide over an area.
     max_points : int, keyword-only
-        The most points measured per direction; beyond, the search stops
+        The most points measured per direction after the first pass (which
+        measures every vertex and face centroid); beyond, the search stops
         with a ``RuntimeWarning`` and the bounds reached (``converged`` False).
+        Default 250,000 (about a second).
+
+    Notes
+    -----
+    The bounds meet quickly where one face of ``b`` is nearest to each
+    part of ``a``, and where ``b``'s faces that compete are far from each
+    other compared with the distance.  Two cases converge only as fast as
+    the subtriangles shrink, and stop at ``max_points``: surfaces that
+    coincide over an area but are triangulated differently (a remeshed or
+    turned copy: ``upper`` stays about the size of the subtriangles where
+    the true distance is 0), and curved surfaces close together compared
+    with the size of their faces (two tessellations of one sphere), where
+    the subtriangles must become about as small as the distance near every
+    edge of ``b``.  Their bounds remain certified; ``atol`` stops earlier.
 
     Returns
     -------
@@ -450,7 +472,7 @@ def hausdorff_distance(
     from . import hausdorff
 
     return hausdorff.hausdorff_distance(
-        a, b, directed=directed, rtol=rtol, method=method, max_points=max_points
+        a, b, directed=directed, rtol=rtol, atol=atol, method=method, max_points=max_points
     )
 
 

@@ -51,7 +51,7 @@ Certification.  Every bound is rounded outwards:
 
 So ``lower <= H <= upper`` for the exact surfaces, ``A`` and ``B`` being
 the meshes posed exactly by their transforms.  The search stops when
-``upper - lower <= rtol * upper + 2 (s + s')``, ``s`` and ``s'`` the
+``upper - lower <= max(rtol * upper, atol) + 2 (s + s')``, ``s`` and ``s'`` the
 rounding allowances (``e + delta``) of the worst subtriangle's bound and of
 the best point: bounds closer than that cannot be told apart in floating
 point (identical meshes give ``lower = 0`` and ``upper`` a few ``eps`` of
@@ -217,8 +217,9 @@ class _Items:
 class _Search:
     """The branch and bound of one direction, ``h(A, B)``."""
 
-    def __init__(self, surface, target, rtol, floor, budget):
-        self.surface, self.target, self.rtol, self.budget = surface, target, rtol, budget
+    def __init__(self, surface, target, tolerance, floor, budget):
+        self.surface, self.target, self.budget = surface, target, budget
+        self.rtol, self.atol = tolerance
         self.floor = floor  # a lower bound of the answer found elsewhere (the other direction)
         self.lower = 0.0  # of this direction: the best point's certified distance
         self.best = None  # (point, d~, slack)
@@ -304,13 +305,15 @@ class _Search:
     def run(self):
         """``(lower, upper, converged)`` of this direction (items below ``floor`` dropped)."""
         items = self.start()
+        self.budget += self.evaluated  # the first pass (every vertex and face) is not counted
         converged = True
         while True:
             level = max(self.lower, self.floor)
             items = items.take(items.upper > level)
             if not len(items):
                 break
-            allowance = _up(self.rtol * items.upper + 2.0 * _up(items.slack + self.best_slack))
+            wanted = np.maximum(self.rtol * items.upper, self.atol)
+            allowance = _up(wanted + 2.0 * _up(items.slack + self.best_slack))
             open_ = items.upper - level > allowance
             if not open_.any():
                 break
@@ -328,13 +331,13 @@ class _Search:
         return self.lower, upper, converged
 
 
-def _check_rtol(rtol):
-    if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.integer, np.floating)):
-        raise TypeError(f"rtol must be a number > 0; got {type(rtol).__name__}")
-    value = float(rtol)
-    if not (np.isfinite(value) and value > 0.0):
-        raise ValueError(f"rtol must be a finite number > 0; got {rtol!r}")
-    return value
+def _check_tolerance(value, name, least):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number {least}; got {type(value).__name__}")
+    number = float(value)
+    if not (np.isfinite(number) and (number > 0.0 if least == "> 0" else number >= 0.0)):
+        raise ValueError(f"{name} must be a finite number {least}; got {value!r}")
+    return number
 
 
 def _check_budget(max_points):
@@ -345,11 +348,11 @@ def _check_budget(max_points):
     return int(max_points)
 
 
-def hausdorff_distance(a, b, *, directed=False, rtol=1e-6, method="robust", max_points=1_000_000):
+def hausdorff_distance(a, b, *, directed=False, rtol=1e-6, atol=0.0, method="robust", max_points=250_000):
     """The Hausdorff distance between two meshes; see :func:`proximity.hausdorff_distance`."""
     mesh_a, ra, ta = _mesh_of(a, "a")
     mesh_b, rb, tb = _mesh_of(b, "b")
-    rtol = _check_rtol(rtol)
+    tolerance = (_check_tolerance(rtol, "rtol", "> 0"), _check_tolerance(atol, "atol", ">= 0"))
     budget = _check_budget(max_points)
     if not isinstance(directed, (bool, np.bool_)):
         raise TypeError(f"directed must be True or False; got {directed!r}")
@@ -357,11 +360,13 @@ def hausdorff_distance(a, b, *, directed=False, rtol=1e-6, method="robust", max_
     if name not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS} for a Hausdorff distance; got {method!r}")
     with np.errstate(invalid="ignore", over="ignore"):
-        forward = _Search(_Surface(mesh_a, ra, ta), _Target(mesh_b, rb, tb, name), rtol, 0.0, budget)
+        forward = _Search(_Surface(mesh_a, ra, ta), _Target(mesh_b, rb, tb, name), tolerance, 0.0, budget)
         lower, upper, converged = forward.run()
         searches = [(forward, "a")]
         if not directed:
-            backward = _Search(_Surface(mesh_b, rb, tb), _Target(mesh_a, ra, ta, name), rtol, lower, budget)
+            # h(b, a) matters only where it exceeds h(a, b)'s lower bound: it prunes the second search.
+            backward = _Search(_Surface(mesh_b, rb, tb), _Target(mesh_a, ra, ta, name), tolerance, lower,
+                               budget)  # fmt: skip
             lower_b, upper_b, converged_b = backward.run()
             lower, upper, converged = max(lower, lower_b), max(upper, upper_b), converged and converged_b
             searches.append((backward, "b"))
@@ -371,7 +376,8 @@ def hausdorff_distance(a, b, *, directed=False, rtol=1e-6, method="robust", max_
     point_a, point_b = (point, other) if side == "a" else (other, point)
     if not converged:
         warnings.warn(
-            f"hausdorff_distance stopped before reaching rtol={rtol:g} (max_points={budget} points evaluated "
+            f"hausdorff_distance stopped before reaching rtol={rtol:g}, atol={atol:g} (max_points={budget} "
+            "points evaluated "
             f"per direction, or subtriangles {MAX_DEPTH} halvings deep): the distance is between {lower!r} "
             f"and {upper!r}",
             RuntimeWarning,
