@@ -7,7 +7,8 @@ the faces of ``A`` (the scheme of Tang, Lee and Kim, *Interactive Hausdorff
 distance computation for general polygonal models*, SIGGRAPH 2009, and of
 Guthe, Borodin and Klein, 2005, with bounds of our own making certain):
 
-* **Lower bound.**  Every point ``a`` of ``A`` gives ``d(a, B) <= h(A, B)``.
+* **Lower bound.**  Every point ``a`` of ``A`` gives ``d(a, B) <= h(A, B)``
+  (sampled points bound the distance from below, the faces from above).
   The points tried are the vertices of the (sub)triangles of ``A`` and their
   centroids, each evaluated by ``B``'s batched point query.
 * **Upper bound of a (sub)triangle ``T`` of ``A``** with vertices ``p_i``
@@ -56,6 +57,16 @@ rounding allowances (``e + delta``) of the worst subtriangle's bound and of
 the best point: bounds closer than that cannot be told apart in floating
 point (identical meshes give ``lower = 0`` and ``upper`` a few ``eps`` of
 their size).
+
+Slow cases.  The bounds meet at once where one face of ``B`` is nearest
+to a whole subtriangle; elsewhere the gap shrinks with the subtriangles.
+Where the distance near its maximum is decided by two faces of ``B`` far
+apart compared with the distance, a few levels suffice; but two surfaces
+that coincide over an area with different triangulations (distance 0 on
+both sides of an edge of ``B``), or curved surfaces much closer than their
+faces are wide, need subtriangles as small as the gap wanted along every
+such edge: the search stops at ``max_points`` with a warning, its bounds
+still certified.
 """
 
 import warnings
