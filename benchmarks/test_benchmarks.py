@@ -146,6 +146,21 @@ def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
         assert (expected == 0) == (gap < 0)
 
 
+def test_the_hausdorff_rows_bracket_a_sampled_estimate():
+    import numpy as np
+
+    from benchmarks import pairs
+    from proximity.testing.meshes import icosphere, torus
+
+    out = pairs.hausdorff(icosphere(1), torus(8, 6), np.random.default_rng(0), True, log=lambda _: None)
+    assert len(out["rows"]) == 2
+    for row in out["rows"]:
+        assert row["converged"] and 0 < row["lower"] <= row["upper"] <= row["lower"] * (1 + 1e-6) + 1e-12
+        if "trimesh" in row:  # a sample's greatest distance is at most the exact one
+            assert row["trimesh"]["estimate"] <= row["upper"]
+    assert "pose 1:" in "\n".join(pairs.hausdorff_report(out))
+
+
 def test_the_memory_row_measures_a_query_in_a_fresh_process():
     from benchmarks.speed import memory_row
 

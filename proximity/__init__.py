@@ -54,6 +54,7 @@ from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
     Feature,
+    HausdorffResult,
     MeshResult,
     PairResult,
     PointResult,
@@ -72,6 +73,7 @@ __all__ = [
     "Disk",
     "DiskResult",
     "Feature",
+    "HausdorffResult",
     "Inflated",
     "MeshResult",
     "PairResult",
@@ -92,6 +94,7 @@ __all__ = [
     "closest_point",
     "closest_points",
     "distance",
+    "hausdorff_distance",
     "release_memory",
     "signed_distance",
     "threads",
@@ -361,6 +364,118 @@ def signed_distance(
             f"signed_distance(a, b, method={args[0]!r})"
         )
     return _pair_queries().signed_distance(a, b, method=method, max_distance=max_distance)
+
+
+@keyword_only_signature
+def hausdorff_distance(
+    a: TriangleMesh | Posed,
+    b: TriangleMesh | Posed,
+    *args: object,
+    directed: bool = False,
+    rtol: float = 1e-6,
+    atol: float = 0.0,
+    method: str = DEFAULT_METHOD,
+    max_points: int = 250_000,
+) -> HausdorffResult:
+    """Hausdorff distance between two meshes, with certified lower and upper bounds.
+
+    The directed distance ``h(a, b) = max_{p in a} d(p, b)`` is the largest
+    distance from a point of the surface ``a`` to the surface ``b``; the
+    Hausdorff distance is ``max(h(a, b), h(b, a))``.  Any point of ``a``
+    gives a *lower* bound, ``d(p, b) <= h(a, b)``; *upper* bounds come from
+    each face of ``a`` (the distance to one face of ``b`` is convex, so
+    its maximum over a triangle is at a vertex; and ``d(., b)`` is
+    1-Lipschitz).  A branch and bound splits the faces of ``a`` where the
+    two bounds disagree, until ``upper - lower <= rtol * upper`` (see
+    :mod:`proximity.hausdorff`).
+
+    Parameters
+    ----------
+    a, b : TriangleMesh or posed view of one
+        Two surfaces (``mesh.transformed(T)`` is searched in place).  A mesh
+        of another library is wrapped in :class:`TriangleMesh` first.
+    directed : bool, keyword-only
+        True: ``h(a, b)`` alone, the farthest point of ``a`` from ``b``.
+        False (default): ``max(h(a, b), h(b, a))``.
+    rtol : float, keyword-only
+        The relative gap to reach, ``upper - lower <= rtol * upper``
+        (plus a rounding allowance of a few times the method's error bound,
+        which is all that separates the bounds of meshes at distance 0).
+        Finite and > 0; default 1e-6.
+    atol : float, keyword-only
+        An absolute gap that is enough as well: the search stops at
+        ``upper - lower <= max(rtol * upper, atol)``.  Finite and >= 0;
+        default 0.
+    method : {"robust", "certified"}, keyword-only
+        The point queries behind the bounds, whose error is allowed for:
+        ``robust`` (default) by its documented bound, ``8 eps S + 2^-1075``
+        per triangle (see ``docs/accuracy.md``); ``certified`` by one ulp
+        (it is faithfully rounded).  The bounds are certified either way:
+        ``lower <= H <= upper`` for the exact surfaces, the points of ``a``
+        computed in floating point being allowed for too.  ``certified``
+        runs its exact fallback for every point of ``a`` lying on ``b``,
+        which is slow where the surfaces coincide over an area.
+    max_points : int, keyword-only
+        The most points measured per direction after the first pass (which
+        measures every vertex and face centroid); beyond, the search stops
+        with a ``RuntimeWarning`` and the bounds reached (``converged`` False).
+        Default 250,000 (about a second).
+
+    Notes
+    -----
+    The bounds meet quickly where one face of ``b`` is nearest to each
+    part of ``a``, and where ``b``'s faces that compete are far from each
+    other compared with the distance.  Two cases converge only as fast as
+    the subtriangles shrink, and stop at ``max_points``: surfaces that
+    coincide over an area but are triangulated differently (a remeshed or
+    turned copy: ``upper`` stays about the size of the subtriangles where
+    the true distance is 0), and curved surfaces close together compared
+    with the size of their faces (two tessellations of one sphere), where
+    the subtriangles must become about as small as the distance near every
+    edge of ``b``.  Their bounds remain certified; ``atol`` stops earlier.
+
+    Returns
+    -------
+    HausdorffResult
+        ``lower`` and ``upper``; ``distance``, the distance from the
+        witness point (the farthest found) to the other mesh; the witness
+        pair ``point_a``, ``point_b`` and the ``side`` holding the witness.
+
+    Raises
+    ------
+    TypeError
+        Where ``a`` or ``b`` is not a :class:`TriangleMesh` or a posed view of one.
+    ValueError
+        Where ``rtol`` is not a finite number > 0, or ``method`` is not one of the two.
+
+    Examples
+    --------
+    A unit square and a copy of it lifted by 0.5 and stretched to twice its
+    width: the corner (2, 0, 0.5) is farthest from the square.
+
+    >>> import proximity
+    >>> square = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+    ...                                 [[0, 1, 2], [0, 2, 3]])
+    >>> wide = proximity.TriangleMesh([[0, 0, 0.5], [2, 0, 0.5], [2, 1, 0.5], [0, 1, 0.5]],
+    ...                               [[0, 1, 2], [0, 2, 3]])
+    >>> r = proximity.hausdorff_distance(square, wide)
+    >>> r.lower <= 1.25**0.5 <= r.upper, r.upper - r.lower <= 1e-6 * r.upper
+    (True, True)
+    >>> r.side, r.point_b.tolist(), r.point_a.tolist()
+    ('b', [2.0, 0.0, 0.5], [1.0, 0.0, 0.0])
+    >>> round(proximity.hausdorff_distance(square, wide, directed=True).distance, 12)
+    0.5
+    """
+    if args:
+        raise TypeError(
+            "hausdorff_distance() takes two positional arguments, a and b; the options are keyword-only: "
+            f"hausdorff_distance(a, b, rtol={args[0]!r})"
+        )
+    from . import hausdorff
+
+    return hausdorff.hausdorff_distance(
+        a, b, directed=directed, rtol=rtol, atol=atol, method=method, max_points=max_points
+    )
 
 
 def release_memory() -> int:

@@ -630,3 +630,67 @@ def beyond(answer, limit):
     if _QUERY in answer.__dict__:
         result.__dict__[_QUERY] = answer.__dict__[_QUERY]
     return result
+
+
+@dataclass(frozen=True, repr=False)
+class HausdorffResult:
+    """The Hausdorff distance between two meshes: :func:`proximity.hausdorff_distance`.
+
+    Attributes
+    ----------
+    distance : float
+        The distance from the witness (``point_a`` where ``side == "a"``,
+        ``point_b`` where ``"b"``) to the other mesh, as the method computes
+        it, clamped to ``[lower, upper]``.
+    lower, upper : float
+        Certified bounds: ``lower <= H <= upper`` for the exact Hausdorff
+        distance ``H`` (the directed one with ``directed=True``).
+    point_a, point_b : ndarray of float64, shape ``(3,)``
+        The witness pair: where ``side == "a"``, ``point_a`` is the point of
+        ``a`` found farthest from ``b`` (it gives ``lower``) and ``point_b``
+        its closest point on ``b``; where ``side == "b"``, the other way
+        round.
+    side : str
+        ``"a"`` or ``"b"``: the mesh holding the farthest point.
+    directed : bool
+        Whether this is ``h(a, b)`` alone.
+    converged : bool
+        False where the search stopped at ``max_points`` or at the depth
+        limit before ``upper - lower`` reached ``rtol`` (with a warning).
+    points_evaluated : int
+        How many points the search measured against the other mesh.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity
+    >>> square = proximity.TriangleMesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+    ...                                 [[0, 1, 2], [0, 2, 3]])
+    >>> T = np.eye(4); T[:3, 3] = [0, 0, 0.5]
+    >>> r = proximity.hausdorff_distance(square, square.transformed(T))
+    >>> r.lower <= 0.5 <= r.upper, r.converged
+    (True, True)
+    """
+
+    distance: float
+    lower: float
+    upper: float
+    point_a: np.ndarray
+    point_b: np.ndarray
+    side: str
+    directed: bool
+    converged: bool
+    points_evaluated: int
+
+    def __post_init__(self):
+        for name in ("point_a", "point_b"):
+            object.__setattr__(self, name, freeze_result(np.array(getattr(self, name), np.float64)))
+
+    def __setstate__(self, state):
+        self.__dict__.update(freeze_fields(state))
+
+    def __repr__(self):
+        return (
+            f"HausdorffResult(distance={self.distance!r}, lower={self.lower!r}, upper={self.upper!r}, "
+            f"point_a={self.point_a.tolist()}, point_b={self.point_b.tolist()}, side={self.side!r}, "
+            f"directed={self.directed}, converged={self.converged}, points_evaluated={self.points_evaluated})"
+        )
