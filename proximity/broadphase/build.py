@@ -36,6 +36,17 @@ def _centroid(rows, j, a):
 
 
 @inline
+def _centre(rows, j):
+    """The three coordinates of :func:`_centroid`: one compile, where calls
+    with the constants 0, 1 and 2 would compile one per constant."""
+    return (
+        rows[j, 0] * 0.5 + rows[j, 3] * 0.5,
+        rows[j, 1] * 0.5 + rows[j, 4] * 0.5,
+        rows[j, 2] * 0.5 + rows[j, 5] * 0.5,
+    )
+
+
+@inline
 def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
     """Split node ``i`` (primitives ``child[i] .. + count[i]``) at its best
     binned SAH plane, into nodes ``first_child`` and ``first_child + 1``.
@@ -54,7 +65,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
     cnt = count[i]
     end = start + cnt
     columns = rows.shape[1]
-    axis = -1
+    axis = np.int64(-1)  # not the constant -1, which would compile a variant of _centroid for it
     widest = 0.0
     for a in range(3):
         extent = cmax[i - base, a] - cmin[i - base, a]
@@ -112,7 +123,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
         # Coincident centroids (or costs beyond the float range): halves by index.
         mid = start + cnt // 2
         for j in range(start, end):
-            x, y, z = _centroid(rows, j, 0), _centroid(rows, j, 1), _centroid(rows, j, 2)
+            x, y, z = _centre(rows, j)
             if j < mid:
                 lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
                 lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
@@ -124,7 +135,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
         lo_j = start
         hi_j = end - 1
         while lo_j <= hi_j:
-            x, y, z = _centroid(rows, lo_j, 0), _centroid(rows, lo_j, 1), _centroid(rows, lo_j, 2)
+            x, y, z = _centre(rows, lo_j)
             h = x if a == 0 else (y if a == 1 else z)
             if min(int((h - origin) * scale), BINS - 1) <= best_bin:
                 lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
