@@ -1,11 +1,16 @@
 """How the kernels are compiled: inlining, the disk cache, and specialisation.
 
-Three decorators and three functions, used by every kernel module:
+Four decorators and three functions, used by every kernel module:
 
 ``inline``
     A helper inlined by LLVM into its callers (``forceinline``).  Numba
     compiles it once per signature; inlining at Numba's IR level instead
     would run its front end again at every call site.
+``spliced``
+    A helper with a single call site, spliced into its caller at Numba's IR
+    level (``inline="always"``): it is typed and lowered as part of its
+    caller, without a compile of its own (which, for a small helper, costs
+    as much as its code).
 ``part``
     A larger function compiled into the kernels that call it (a block of a
     batch loop, a scalar query), where LLVM decides whether to inline.
@@ -54,6 +59,11 @@ _INLINE = {"forceinline": True, **_PART}
 def inline(func):
     """A helper compiled into its callers by LLVM."""
     return njit(**_INLINE)(func)
+
+
+def spliced(func):
+    """A helper of one call site, spliced into its caller by Numba (see the module's docstring)."""
+    return njit(inline="always", **_PART)(func)
 
 
 def part(func):

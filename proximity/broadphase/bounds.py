@@ -67,7 +67,7 @@ import numpy as np
 
 from .. import _threads, primitives
 from .._fp import EPS
-from .._jit import inline, kernel
+from .._jit import inline, kernel, spliced
 from ._alloc import empty, readonly
 
 SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see the module docstring)
@@ -239,13 +239,13 @@ def _down32(x):
     return np.float32(min(x - abs(x) * 2.0**-23 - 2.0**-149, _FLOAT32_MAX))
 
 
-@inline
+@spliced
 def _up32(x):
     """A float32 at least ``x`` (see :func:`_down32`)."""
     return -_down32(-x)
 
 
-@inline
+@spliced
 def _stored_row(cull, k, out):
     """Row ``k`` of :func:`stored_cull`."""
     for a in range(3):

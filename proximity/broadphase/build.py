@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from .. import _threads, primitives
-from .._jit import inline, kernel
+from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, empty, empty_ints, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
@@ -169,7 +169,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
 BUILD_SUBTREE = 4096
 
 
-@inline
+@spliced
 def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size):
     """Split node ``root`` and its descendants down to the leaves, breadth
     first, into nodes ``root + 1`` on, whose centroid bounds are rows of
@@ -190,7 +190,7 @@ def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size)
     return last - root, depth
 
 
-@inline
+@spliced
 def _number_block(i, nodes, offset, child, block_child, block_count, out_child, out_count):
     """Copy node ``i``'s block of ``nodes`` nodes into the tree: block node
     ``base + t`` is node ``offset + t - 1``, and the root keeps its number."""
@@ -368,7 +368,7 @@ def _row_hashes(kinds, bits):
     return h
 
 
-@inline
+@spliced
 def _face_row(vertices, bits, faces, k, kind, cull, hashes):
     i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
     plane_row(
@@ -420,7 +420,7 @@ def distinct(kinds, params):
     return keep
 
 
-@inline
+@spliced
 def _face_params(vertices, faces, order, params, j):
     k = order[j]
     for v in range(3):

@@ -12,7 +12,7 @@ import numpy as np
 from numba import prange
 
 from .. import _pool, _threads, primitives
-from .._jit import inline, kernel
+from .._jit import inline, kernel, spliced
 from ._alloc import empty, empty_ints, readonly
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
@@ -89,7 +89,7 @@ def _merge(bounds, i, rows, first, last):
             bounds[i, 6 + a] += rows[k, 6 + a]
 
 
-@inline
+@spliced
 def _merge_leaf(bounds, i, first, last, kinds, params, cull, normals, vertices):
     """Leaf ``i``'s box and normal sum (columns 6-8) over its stored
     primitives ``first .. last - 1``: the extremes of the points of those
@@ -134,7 +134,7 @@ def _frame(bounds, i):
     bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
 
 
-@inline
+@spliced
 def _across(ux, uy, uz):
     """Two vectors ``v``, ``w`` that make with ``u`` an orthogonal frame of
     vectors no longer than 1 (zero where ``u`` is zero).
