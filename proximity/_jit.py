@@ -137,9 +137,9 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=F
     """The kernel ``func`` with the global names ``bindings`` bound, compiled
     for ``signature`` (lazily without one).
 
-    ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"`` or
-    ``"inline"`` (compiled into its callers, as :func:`part` and
-    :func:`inline`), or ``"pointer"``: cached, and called from compiled code
+    ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"``,
+    ``"inline"`` or ``"spliced"`` (compiled into its callers, as :func:`part`,
+    :func:`inline` and :func:`spliced`), or ``"pointer"``: cached, and called from compiled code
     through its address (see :func:`address` and :func:`function_at`).
 
     ``tag`` names the specialisation: it is part of the cached kernel's file
@@ -160,6 +160,8 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=F
             args = (signature,) if signature is not None else ()
             if role == "pointer":
                 kernel_ = compiled(copy, args, no_cpython_wrapper=True, **_OPTIONS)
+            elif role == "spliced":
+                kernel_ = spliced(copy)
             elif role != "kernel":
                 kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:

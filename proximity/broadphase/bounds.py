@@ -114,10 +114,14 @@ def _bound_sqr(boxes, k, s, qx, qy, qz):
 def _slabs_sqr(boxes, k, s, qx, qy, qz):
     """Squared distance from the scaled point to node ``k``'s oriented box
     (its three slabs), a lower bound as :func:`_bound_sqr`'s."""
-    hu = _excess(boxes, k, 6, s, qx, qy, qz)
-    hv = _excess(boxes, k, 11, s, qx, qy, qz)
-    hw = _excess(boxes, k, 16, s, qx, qy, qz)
-    return hu * hu + hv * hv + hw * hw
+    # A loop rather than three calls with the constants 6, 11 and 16, which
+    # would compile a variant of _excess for each; the sum starts at -0.0,
+    # which adds nothing (to any float, -0.0 and NaN included), and is left out.
+    total = -0.0
+    for c in range(6, 21, 5):
+        h = _excess(boxes, k, c, s, qx, qy, qz)
+        total += h * h
+    return total
 
 
 @inline
