@@ -1,11 +1,16 @@
 """How the kernels are compiled: inlining, the disk cache, and specialisation.
 
-Three decorators and three functions, used by every kernel module:
+Four decorators and three functions, used by every kernel module:
 
 ``inline``
     A helper inlined by LLVM into its callers (``forceinline``).  Numba
     compiles it once per signature; inlining at Numba's IR level instead
     would run its front end again at every call site.
+``spliced``
+    A helper with a single call site, spliced into its caller at Numba's IR
+    level (``inline="always"``): it is typed and lowered as part of its
+    caller, without a compile of its own (which, for a small helper, costs
+    as much as its code).
 ``part``
     A larger function compiled into the kernels that call it (a block of a
     batch loop, a scalar query), where LLVM decides whether to inline.
@@ -54,6 +59,11 @@ _INLINE = {"forceinline": True, **_PART}
 def inline(func):
     """A helper compiled into its callers by LLVM."""
     return njit(**_INLINE)(func)
+
+
+def spliced(func):
+    """A helper of one call site, spliced into its caller by Numba (see the module's docstring)."""
+    return njit(inline="always", **_PART)(func)
 
 
 def part(func):
@@ -127,9 +137,9 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=F
     """The kernel ``func`` with the global names ``bindings`` bound, compiled
     for ``signature`` (lazily without one).
 
-    ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"`` or
-    ``"inline"`` (compiled into its callers, as :func:`part` and
-    :func:`inline`), or ``"pointer"``: cached, and called from compiled code
+    ``role`` is ``"kernel"`` (cached, callable from Python), ``"part"``,
+    ``"inline"`` or ``"spliced"`` (compiled into its callers, as :func:`part`,
+    :func:`inline` and :func:`spliced`), or ``"pointer"``: cached, and called from compiled code
     through its address (see :func:`address` and :func:`function_at`).
 
     ``tag`` names the specialisation: it is part of the cached kernel's file
@@ -150,6 +160,8 @@ def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=F
             args = (signature,) if signature is not None else ()
             if role == "pointer":
                 kernel_ = compiled(copy, args, no_cpython_wrapper=True, **_OPTIONS)
+            elif role == "spliced":
+                kernel_ = spliced(copy)
             elif role != "kernel":
                 kernel_ = njit(*args, **(_INLINE if role == "inline" else _PART))(copy)
             else:

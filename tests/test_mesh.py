@@ -469,15 +469,24 @@ def test_the_bounds_a_tree_keeps_hold_what_they_bound(scale, offset):
             first[i], last[i] = tree.child[i], tree.child[i] + tree.count[i]
         else:
             first[i], last[i] = first[tree.child[i]], last[tree.child[i] + 1]
+    inner = np.flatnonzero(tree.count == 0)
+    assert (tree.child[inner] > inner).all()  # which the fit relies on
     bounds = tree.bounds
     for i in range(tree.nodes):
         points = corners[first[i] : last[i]].reshape(-1, 3)
-        assert (points >= bounds[i, :3]).all() and (points <= bounds[i, 3:6]).all(), i
+        # The box is the points' extremes, exactly.
+        assert (bounds[i, :3] == points.min(axis=0)).all() and (bounds[i, 3:6] == points.max(axis=0)).all(), i
         frame = bounds[i, [6, 7, 8, 11, 12, 13, 16, 17, 18]].reshape(3, 3)
         assert np.linalg.norm(frame, 2) <= 1.0, i
         for c in (6, 11, 16):
             h = points @ bounds[i, c : c + 3]
             assert (h >= bounds[i, c + 3] - slack).all() and (h <= bounds[i, c + 4] + slack).all(), (i, c)
+            if np.isfinite(bounds[i, c + 3 : c + 5]).all():
+                # The slab's range is the extremes of the points' projections,
+                # each rounded as the fit rounds it.
+                u = bounds[i, c : c + 3]
+                exact_h = points[:, 0] * u[0] + points[:, 1] * u[1] + points[:, 2] * u[2]
+                assert bounds[i, c + 3] == exact_h.min() and bounds[i, c + 4] == exact_h.max(), (i, c)
     points = box_points(np.random.default_rng(5), vertices, 300)
     brute = TriangleMesh(vertices, faces, broad_phase="brute")
     assert_same(brute.closest_point(points), mesh.closest_point(points))

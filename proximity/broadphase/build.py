@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from .. import _threads, primitives
-from .._jit import inline, kernel
+from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, empty, empty_ints, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
@@ -33,6 +33,17 @@ BINS = 16
 def _centroid(rows, j, a):
     # Halves first: the sum of two coordinates near 1e308 would overflow.
     return rows[j, a] * 0.5 + rows[j, 3 + a] * 0.5
+
+
+@inline
+def _centre(rows, j):
+    """The three coordinates of :func:`_centroid`: one compile, where calls
+    with the constants 0, 1 and 2 would compile one per constant."""
+    return (
+        rows[j, 0] * 0.5 + rows[j, 3] * 0.5,
+        rows[j, 1] * 0.5 + rows[j, 4] * 0.5,
+        rows[j, 2] * 0.5 + rows[j, 5] * 0.5,
+    )
 
 
 @inline
@@ -54,7 +65,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
     cnt = count[i]
     end = start + cnt
     columns = rows.shape[1]
-    axis = -1
+    axis = np.int64(-1)  # not the constant -1, which would compile a variant of _centroid for it
     widest = 0.0
     for a in range(3):
         extent = cmax[i - base, a] - cmin[i - base, a]
@@ -112,7 +123,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
         # Coincident centroids (or costs beyond the float range): halves by index.
         mid = start + cnt // 2
         for j in range(start, end):
-            x, y, z = _centroid(rows, j, 0), _centroid(rows, j, 1), _centroid(rows, j, 2)
+            x, y, z = _centre(rows, j)
             if j < mid:
                 lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
                 lx1, ly1, lz1 = max(lx1, x), max(ly1, y), max(lz1, z)
@@ -124,7 +135,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
         lo_j = start
         hi_j = end - 1
         while lo_j <= hi_j:
-            x, y, z = _centroid(rows, lo_j, 0), _centroid(rows, lo_j, 1), _centroid(rows, lo_j, 2)
+            x, y, z = _centre(rows, lo_j)
             h = x if a == 0 else (y if a == 1 else z)
             if min(int((h - origin) * scale), BINS - 1) <= best_bin:
                 lx0, ly0, lz0 = min(lx0, x), min(ly0, y), min(lz0, z)
@@ -158,7 +169,7 @@ def _split(i, first_child, child, count, rows, order, cmin, cmax, base, bins):
 BUILD_SUBTREE = 4096
 
 
-@inline
+@spliced
 def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size):
     """Split node ``root`` and its descendants down to the leaves, breadth
     first, into nodes ``root + 1`` on, whose centroid bounds are rows of
@@ -179,7 +190,7 @@ def _split_subtree(root, child, count, rows, order, cmin, cmax, bins, leaf_size)
     return last - root, depth
 
 
-@inline
+@spliced
 def _number_block(i, nodes, offset, child, block_child, block_count, out_child, out_count):
     """Copy node ``i``'s block of ``nodes`` nodes into the tree: block node
     ``base + t`` is node ``offset + t - 1``, and the root keeps its number."""
@@ -357,7 +368,7 @@ def _row_hashes(kinds, bits):
     return h
 
 
-@inline
+@spliced
 def _face_row(vertices, bits, faces, k, kind, cull, hashes):
     i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
     plane_row(
@@ -409,7 +420,7 @@ def distinct(kinds, params):
     return keep
 
 
-@inline
+@spliced
 def _face_params(vertices, faces, order, params, j):
     k = order[j]
     for v in range(3):

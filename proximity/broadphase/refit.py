@@ -12,7 +12,7 @@ import numpy as np
 from numba import prange
 
 from .. import _pool, _threads, primitives
-from .._jit import inline, kernel
+from .._jit import inline, kernel, spliced
 from ._alloc import empty, empty_ints, readonly
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
@@ -21,8 +21,8 @@ _VERTICES = primitives.vertex_counts()
 N_PARAMS = primitives.N_PARAMS
 
 
-#: Nodes over at most this many primitives are fitted subtree by subtree,
-#: while the subtree's primitives are in cache.
+#: Nodes over at most this many primitives are refitted subtree by subtree
+#: (:func:`refit_faces`), while the subtree's primitives are in cache.
 REFIT_SUBTREE = 8192
 
 
@@ -41,7 +41,7 @@ def _rows(child, count, i):
 
 @inline
 def _refit_top(child, count, top, tasks, start, end):
-    """The tasks of :func:`refit`: ``(n_top, n_tasks)``, the first entries of
+    """The tasks of :func:`refit_faces`: ``(n_top, n_tasks)``, the first entries of
     ``top`` and ``tasks`` set.
 
     ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
@@ -89,7 +89,7 @@ def _merge(bounds, i, rows, first, last):
             bounds[i, 6 + a] += rows[k, 6 + a]
 
 
-@inline
+@spliced
 def _merge_leaf(bounds, i, first, last, kinds, params, cull, normals, vertices):
     """Leaf ``i``'s box and normal sum (columns 6-8) over its stored
     primitives ``first .. last - 1``: the extremes of the points of those
@@ -134,7 +134,7 @@ def _frame(bounds, i):
     bounds[i, 16], bounds[i, 17], bounds[i, 18] = wx, wy, wz
 
 
-@inline
+@spliced
 def _across(ux, uy, uz):
     """Two vectors ``v``, ``w`` that make with ``u`` an orthogonal frame of
     vectors no longer than 1 (zero where ``u`` is zero).
@@ -226,28 +226,6 @@ def _subtree_nodes(root, start, end, child, count):
 
 
 @inline
-def _fit_subtree(bounds, root, start, end, child, count, kinds, params, cull, normals, vertices):
-    """Every node of the subtree at ``root``: boxes and normal sums from the
-    leaves up, then, but for ``root`` itself, its frame and slab ranges."""
-    nodes, n = _subtree_nodes(root, start, end, child, count)
-    # A node comes before its descendants: backwards, they are done first.
-    for t in range(n - 1, -1, -1):
-        i = nodes[t]
-        if count[i] > 0:
-            start[i] = child[i]
-            end[i] = child[i] + count[i]
-            _merge_leaf(bounds, i, start[i], end[i], kinds, params, cull, normals, vertices)
-        else:
-            start[i] = start[child[i]]
-            end[i] = end[child[i] + 1]
-            _merge(bounds, i, bounds, child[i], child[i] + 2)
-    for t in range(1, n):
-        i = nodes[t]
-        _frame(bounds, i)
-        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
-
-
-@inline
 def _box_range(bounds, c, ax, ay, az):
     """The range of ``a . X`` over node ``c``'s box."""
     lo, hi = 0.0, 0.0
@@ -323,8 +301,10 @@ def _ranges_merged(bounds, i, child):
 
 @inline
 def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices):
-    """:func:`_fit_subtree` with the ranges of nodes above the leaves from
-    their children's (:func:`_ranges_merged`), children first."""
+    """Every node of the subtree at ``root``: boxes and normal sums from the
+    leaves up, then, but for ``root`` itself, its frame, and its ranges:
+    exact for a leaf, from its children's above (:func:`_ranges_merged`),
+    children first."""
     nodes, n = _subtree_nodes(root, start, end, child, count)
     for t in range(n - 1, -1, -1):
         i = nodes[t]
@@ -392,54 +372,51 @@ def _fit_faces(
 
 
 #: The steps of :func:`_fit_step`.
-_TASKS, _SUBTREES, _TOP, _FRAMES = 0, 1, 2, 3
+_BOXES, _FRAMES = 0, 1
 
 
 @kernel(nogil=True)
-def _fit_step(
-    step, lo, hi, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, vertices
-):
-    """One step of :func:`refit` on the tasks ``lo .. hi - 1``: one kernel for
-    every step, so that a first build compiles one.  Returns ``(n_top,
-    n_tasks)`` for ``_TASKS`` (:func:`_refit_top`), else zeros.
+def _fit_step(step, lo, hi, bounds, start, end, child, count, kinds, params, cull, normals, vertices):
+    """One step of :func:`refit`; one kernel for both, so that a first build compiles one.
 
-    ``_SUBTREES``: the subtrees at ``tasks[lo:hi]``, one per task.
-    ``_TOP``: the boxes and normal sums of the ``top`` nodes, children
-    first.  ``_FRAMES``: the frames and ranges of the nodes ``lo .. hi - 1``
-    of the top nodes followed by the subtrees' roots.
+    ``_BOXES``: every node's box and normal sum, and its range of stored
+    primitives ``start[i] .. end[i] - 1``, from the last node back: the
+    children of a node come after it (see :func:`~.build._build`), so they
+    are done first.  ``_FRAMES``: the frames and slab ranges of the nodes
+    ``lo .. hi - 1``.
     """
-    if step == _TASKS:
-        return _refit_top(child, count, top, tasks, start, end)
-    if step == _SUBTREES:
-        for j in range(lo, hi):
-            _fit_subtree(bounds, tasks[j], start, end, child, count, kinds, params, cull, normals, vertices)
-    elif step == _TOP:
-        for t in range(top.shape[0] - 1, -1, -1):
-            _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
+    if step == _BOXES:
+        for i in range(child.shape[0] - 1, -1, -1):
+            if count[i] > 0:
+                start[i] = child[i]
+                end[i] = child[i] + count[i]
+                _merge_leaf(bounds, i, start[i], end[i], kinds, params, cull, normals, vertices)
+            else:
+                start[i] = start[child[i]]
+                end[i] = end[child[i] + 1]
+                _merge(bounds, i, bounds, child[i], child[i] + 2)
     else:
-        for j in range(lo, hi):
-            i = top[j] if j < top.shape[0] else tasks[j - top.shape[0]]
+        for i in range(lo, hi):
             _frame(bounds, i)
             _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
-    return 0, 0
 
 
-#: Cull rows of none: what :func:`_tasks` reads of them.
-_NO_ROWS = readonly(np.empty((0, CULL_COLUMNS), np.float32), np.float32)
+@kernel()
+def _refit_tasks(child, count, top, tasks, start, end):
+    """:func:`_refit_top` (the tasks of :func:`refit_faces`)."""
+    return _refit_top(child, count, top, tasks, start, end)
 
 
-def _tasks(bounds, child, count, kinds, params, cull, normals):
-    """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length.
-
-    ``params``, ``cull`` and ``normals`` are passed read-only whatever they
-    are, so that a refit and the first fit call the kernel with the same
-    types."""
+def _tasks(child, count):
+    """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length."""
     m = len(child)
     top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
-    n_top, n_tasks = _fit_step(
-        _TASKS, 0, 0, bounds, top, tasks, start, end, child, count, kinds, params, cull, normals, _VERTICES
-    )
+    n_top, n_tasks = _refit_tasks(child, count, top, tasks, start, end)
     return top[:n_top], tasks[:n_tasks], start, end
+
+
+#: Ranges of nodes per thread of the frames' step of :func:`refit`.
+_FRAME_RANGES_PER_THREAD = 8
 
 
 def refit(child, count, kinds, params, cull, normals=None):
@@ -462,9 +439,10 @@ def refit(child, count, kinds, params, cull, normals=None):
     axis-aligned box alone would not (a point over a tilted patch, or near
     the center of a sphere).
 
-    The subtrees, and the nodes above them, are fitted on the threads.
-    Exact ranges cost O(primitives) per level of the tree; a refit
-    (:func:`refit_faces`) merges them instead.
+    The boxes in one pass from the leaves up; the frames and ranges, a node
+    at a time, on the threads, in ranges of nodes of about equal numbers of
+    primitives.  Exact ranges cost O(primitives) per level of the tree; a
+    refit (:func:`refit_faces`) merges them instead.
     """
     normals = cull if normals is None else normals
     if len(child) == 1:
@@ -476,19 +454,22 @@ def refit(child, count, kinds, params, cull, normals=None):
         bounds[0, 9::5] = -math.inf
         bounds[0, 10::5] = math.inf
         return bounds
-    bounds = empty(len(child), NODE_COLUMNS)
+    m = len(child)
+    bounds = empty(m, NODE_COLUMNS)
+    start, end = empty_ints(m), empty_ints(m)
     params = readonly(params, np.float64)
     cull, normals = readonly(cull, cull.dtype), readonly(normals, normals.dtype)
-    top, tasks, start, end = _tasks(bounds, child, count, kinds, params, cull, normals)
-
-    def run(step, lo, hi):
-        tree = (top, tasks, start, end, child, count, kinds, params, cull, normals)
-        _fit_step(step, lo, hi, bounds, *tree, _VERTICES)
-
-    # Tasks differ in size by orders of magnitude: handed out one at a time.
-    _threads.spread(lambda lo, hi: run(_SUBTREES, lo, hi), len(tasks))
-    run(_TOP, 0, 0)
-    _threads.spread(lambda lo, hi: run(_FRAMES, lo, hi), len(top) + len(tasks))
+    tree = (start, end, child, count, kinds, params, cull, normals, _VERTICES)
+    _fit_step(_BOXES, 0, 0, bounds, *tree)
+    # A node's frame and ranges cost one pass over its primitives: ranges of
+    # nodes cut at about equal sums of those (the root alone may be one).
+    cost = np.cumsum(end - start)
+    pieces = _FRAME_RANGES_PER_THREAD * _threads.current()
+    cuts = np.searchsorted(cost, cost[-1] * np.arange(1, pieces) / pieces, side="right")
+    cuts = np.unique(np.concatenate([[0], cuts, [m]]))
+    _threads.spread(
+        lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], bounds, *tree), len(cuts) - 1
+    )
     return bounds
 
 
@@ -537,10 +518,7 @@ def refit_faces(vertices, faces, order, child, count, kinds):
         _gather_faces(vertices, faces, order, params, cull)
         return params, cull, refit(child, count, kinds, params, cull)
     bounds = _pool.empty((len(child), NODE_COLUMNS))
-    # The tasks alone: rows of the types a mesh's first fit passes (float32
-    # cull rows), so that the kernel it compiled serves.
-    rows = readonly(params, np.float64)
-    top, tasks, start, end = _tasks(bounds, child, count, kinds, rows, _NO_ROWS, _NO_ROWS)
+    top, tasks, start, end = _tasks(child, count)
     with numba.parallel_chunksize(1):
         _fit_faces(
             vertices,

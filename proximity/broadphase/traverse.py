@@ -30,6 +30,9 @@ from .._jit import inline, kernel, launcher, specialize
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per block function call
+#: The largest index (see :func:`_search_block`): a constant, where ``np.iinfo``
+#: in a kernel would compile two functions.
+_SENTINEL = int(np.iinfo(np.int64).max)
 #: Fewest blocks a thread takes at a time: a thread started for fewer would
 #: cost about as much as it saves.
 SEARCH_GRAIN = 4
@@ -197,7 +200,7 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
     # Above every caller's index, which may reach past the stored count
     # where copies were left out (:func:`~.build.distinct`): an infinite
     # answer, which ties with the initial ``best``, then still wins.
-    sentinel = np.iinfo(np.int64).max
+    sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     # The previous point's closest point, a point of the collection: points
@@ -328,10 +331,10 @@ def _chain(present, make, tag):
             groups.append([fn, p.code, p.code])
     names = "_".join(p.name for p in present)
     fn, low, high = groups[-1]
-    chain = specialize(_last, f"{tag}__{names}__{low}", role="inline", ROW=fn)
+    chain = specialize(_last, f"{tag}__{names}__{low}", role="spliced", ROW=fn)
     for fn, low, high in reversed(groups[:-1]):
         bindings = dict(ROW=fn, NEXT=chain, LOW=low, HIGH=high)
-        chain = specialize(_link, f"{tag}__{names}__{low}", role="inline", **bindings)
+        chain = specialize(_link, f"{tag}__{names}__{low}", role="spliced", **bindings)
     return chain
 
 
