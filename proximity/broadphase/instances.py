@@ -44,7 +44,19 @@ from numba.core import types
 from .. import primitives
 from .._jit import launcher, part, specialize
 from ._alloc import readonly
-from .traverse import _C1I, _C2F, _OUTPUTS, _TREE, BLOCK, NONE, SEARCH_GRAIN, Outputs, TreeArrays, descent
+from .traverse import (
+    _C1I,
+    _C2F,
+    _OUTPUTS,
+    _SENTINEL,
+    _TREE,
+    BLOCK,
+    NONE,
+    SEARCH_GRAIN,
+    Outputs,
+    TreeArrays,
+    descent,
+)
 
 #: The poses and places of the instances: the prototype of each, its rotation
 #: and translation, its world box (low and high corners, and the magnitude of
@@ -87,7 +99,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     dist, sqr, point, feature, extra, flag, prim, undecided = out
     n = points.shape[0]
     m = inst.prototype.shape[0]
-    sentinel = np.iinfo(np.int64).max
+    sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     lower = np.empty(m)

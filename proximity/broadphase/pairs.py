@@ -82,6 +82,7 @@ from .pair_bounds import (  # noqa: F401  (node_data: for the driver)
     upper,
 )
 from .pair_bounds import frame as node_frame
+from .traverse import _SENTINEL
 
 #: Pruning slack, in units of ``M`` (see the module docstring).
 SLACK = 256.0 * EPS
@@ -304,7 +305,7 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
     rout = queries.radius_a[q] + queries.radius_b[q]
     cutoff = queries.cutoff[q]
     fs = np.array([math.inf, math.inf, 0.0, 0.0, math.inf])
-    big = np.iinfo(np.int64).max
+    big = _SENTINEL
     ist = np.array([big, big, -1, -1, 0, 0], np.int64)
     win = np.empty(17)
     fin = np.empty((FINALISTS, 2), np.int64)
@@ -461,7 +462,7 @@ def _finish(q, A, B, pose, queries, fs, ist, win, fin, fin_lo, tb):
     if ist[5] & 2:
         return best_hi
     fs[0] = math.inf
-    big = np.iinfo(np.int64).max
+    big = _SENTINEL
     ist[0], ist[1], ist[2], ist[3] = big, big, -1, -1
     for i in range(ist[4]):
         if fin_lo[i] > best_hi:
