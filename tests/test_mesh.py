@@ -51,6 +51,26 @@ def assert_same(a, b):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
 
 
+def test_a_large_mesh_has_larger_leaves_and_answers_as_brute_force_and_as_refitted(monkeypatch):
+    """A mesh over ``LARGE_TREE`` faces (here lowered) gets leaves of up to
+    ``LARGE_LEAF_SIZE`` faces, and answers as brute force, and as its refit
+    to other vertices answers as a mesh built afresh on them, bit for bit."""
+    vertices, faces = torus(40, 20)
+    monkeypatch.setattr(build_module, "LARGE_TREE", len(faces))
+    mesh = TriangleMesh(vertices, faces, broad_phase="bvh")
+    count = mesh._tree.count
+    assert count.max() == build_module.LARGE_LEAF_SIZE > broadphase.LEAF_SIZE
+    rng = np.random.default_rng(11)
+    points = np.concatenate([near_points(rng, vertices, faces, 400, 1e-3), rng.normal(size=(400, 3))])
+    brute = TriangleMesh(vertices, faces, broad_phase="brute")
+    moved = vertices * [1.3, 0.8, 1.1] + rng.normal(size=vertices.shape) * 0.01
+    refit, fresh = mesh.with_vertices(moved), TriangleMesh(moved, faces, broad_phase="bvh")
+    np.testing.assert_array_equal(refit._tree.count, count)
+    for method in METHODS:
+        assert_same(brute.closest_point(points, method=method), mesh.closest_point(points, method=method))
+        assert_same(fresh.closest_point(points, method=method), refit.closest_point(points, method=method))
+
+
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("name", sorted(MESHES))
 def test_brute_force_and_bvh_agree_bit_for_bit(name, method):
@@ -64,7 +84,9 @@ def test_brute_force_and_bvh_agree_bit_for_bit(name, method):
     np.testing.assert_array_equal(brute.distance(points, method=method), bvh.distance(points, method=method))
 
 
-@pytest.mark.parametrize("leaf_size", [1, broadphase.LEAF_SIZE, build_module.BUILD_SUBTREE + 1000])
+@pytest.mark.parametrize(
+    "leaf_size", [1, broadphase.LEAF_SIZE, build_module.LARGE_LEAF_SIZE, build_module.BUILD_SUBTREE + 1000]
+)
 def test_a_large_hierarchy_answers_as_brute_force_for_any_leaf_size(leaf_size):
     """20,480 faces, more than the build splits as whole subtrees and the
     refit fits as whole subtrees: the nodes above them take the other paths."""

@@ -26,7 +26,25 @@ from .refit import refit
 from .tree import Tree
 
 LEAF_SIZE = 4
+#: Most primitives a leaf holds in a tree over at least :data:`LARGE_TREE`
+#: primitives (see :func:`default_leaf_size`).
+LARGE_LEAF_SIZE = 8
+LARGE_TREE = 1 << 19
 BINS = 16
+
+
+def default_leaf_size(n):
+    """Most primitives a leaf holds in a tree over ``n`` primitives.
+
+    Leaves of up to :data:`LEAF_SIZE` give about 0.62 nodes a primitive;
+    leaves of up to :data:`LARGE_LEAF_SIZE`, 0.34, which is 50 bytes a face
+    fewer of node bounds and topology, and a faster build.  The finer tree
+    prunes better where many faces are near a point's distance (points far
+    from the surface), which pays on trees that stay in cache; on large ones
+    the smaller tree is read from memory faster than the finer one prunes
+    (``docs/performance.md``, "Memory of a mesh", has the measurements).
+    """
+    return LARGE_LEAF_SIZE if n >= LARGE_TREE else LEAF_SIZE
 
 
 @inline
@@ -552,15 +570,16 @@ def brute(kinds, params):
     return assemble(kinds, params, np.arange(n), readonly([0], np.int64), readonly([n], np.int64), 0)
 
 
-def build_tree(kinds, params, leaf_size=LEAF_SIZE):
+def build_tree(kinds, params, leaf_size=None):
     """A bounding-volume hierarchy over the primitives, built once.
 
     Parameters
     ----------
     kinds : ndarray of int8, shape ``(n,)``, n >= 1
     params : ndarray of float64, shape ``(n, N_PARAMS)``
-    leaf_size : int
-        Most primitives a leaf holds.
+    leaf_size : int, optional
+        Most primitives a leaf holds; :func:`default_leaf_size` of the distinct
+        primitives unless given.
 
     Returns
     -------
@@ -571,15 +590,16 @@ def build_tree(kinds, params, leaf_size=LEAF_SIZE):
     if len(kept) < len(kinds):
         kinds, params = kinds[kept], take_rows(params, kept)
     tight, loose = primitive_cull(kinds, params)
+    size = default_leaf_size(len(kinds)) if leaf_size is None else int(leaf_size)
     # The build puts the rows of ``tight`` in leaf order; the others follow.
-    child, count, order, depth = _build(tight, int(leaf_size))
+    child, count, order, depth = _build(tight, size)
     loose = tight if loose is tight else take_rows(loose, order)
     index = order if len(kept) == len(keep) else kept[order]
     kinds, params = kinds[order], take_rows(params, order)
     return assemble(kinds, params, index, child, count, depth, (tight, loose))
 
 
-def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
+def build_faces(vertices, faces, kind, leaf_size=None):
     """:func:`build_tree` for the faces ``faces`` of ``vertices`` (indices into
     it), primitives of kind ``kind`` that are hulls of three points, without
     their parameters in the faces' order: the faces' boxes, slabs and
@@ -594,7 +614,7 @@ def build_faces(vertices, faces, kind, leaf_size=LEAF_SIZE):
     kinds = np.full(n, kind, np.int8)
     if not _all_different(hashes):
         return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)
-    child, count, order, depth = _build(cull, int(leaf_size))
+    child, count, order, depth = _build(cull, default_leaf_size(n) if leaf_size is None else int(leaf_size))
     # The float32 rows the tree keeps, and the float64 ones dropped before
     # the faces' rows are gathered and the nodes fitted (to the faces'
     # points), which halves the build's peak.
