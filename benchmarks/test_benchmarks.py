@@ -161,6 +161,24 @@ def test_the_hausdorff_rows_bracket_a_sampled_estimate():
     assert "pose 1:" in "\n".join(pairs.hausdorff_report(out))
 
 
+def test_the_primitive_pair_rows_are_exact_within_the_bound_and_name_their_peers():
+    import numpy as np
+
+    from benchmarks import pairs
+
+    rows = pairs.primitives(np.random.default_rng(1), True, log=lambda _: None, sizes=(2_000, 20, 10))
+    assert [row["kind"] for row in rows] == ["segment", "capsule", "triangle"]
+    for row in rows:
+        # The robust pair bound, 16 eps S with S at most 4 here.
+        assert row["proximity"] > 0 and row["error"] <= 16 * 2.0**-52 * 4
+        assert all("rate" in peer or "skipped" in peer for peer in row["libraries"].values())
+    # The NumPy baseline agrees on the segments (no degenerate ones among random pairs).
+    assert rows[0]["libraries"]["numpy"]["error"] < 1e-12
+    missed, lines = pairs.checks({"gaps": [], "primitives": rows})
+    assert len(lines) == 3 and missed == sum(line.startswith("MISSED") for line in lines)
+    assert "capsule (2,000 pairs)" in "\n".join(pairs.primitives_report(rows))
+
+
 def test_the_memory_row_measures_a_query_in_a_fresh_process():
     from benchmarks.speed import memory_row
 
