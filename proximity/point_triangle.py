@@ -448,9 +448,13 @@ def _window(ax, ay, az, bx, by, bz, cx, cy, cz):
     return m, (m >= SAFE_MIN) & (m <= SAFE_MAX)
 
 
-@part
+@inline
 def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
     """Robust point-triangle query for any finite input; see the module docstring.
+
+    Inlined into every caller: compiled as a function of its own, a mesh
+    search compiled after a batch query in the same process linked the
+    batch's copy, which made it slower, and the disk cache kept it.
 
     Returns ``(distance, sqr_distance, x, y, z, feature, b0, b1, b2)`` where
     ``(x, y, z)`` is the closest point and ``b*`` are its barycentric
