@@ -540,13 +540,13 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
             "closest_points() takes two positional arguments, a and b; method is keyword-only: "
             f"closest_points(a, b, method={args[0]!r})"
         )
-    found = _instances(closest_points, a, b, method, max_distance, pose_b, False)
-    if found is not None:
-        return found
     if max_distance is None and pose_b is None:
         fast = _fast_for(a, b, method)
         if fast is not None:
             return fast.result(fast.run(a, b))
+    found = _instances(closest_points, a, b, method, max_distance, pose_b, False)
+    if found is not None:
+        return found
     a, b, pose_b, swap, back = _poses(a, b, pose_b)
     names = ("b", "a") if swap else ("a", "b")
     out_shape, side_a, side_b, out = _answer(a, b, method, max_distance, True, names, pose_b)
@@ -605,13 +605,13 @@ def _result(values, out_shape):
 
 def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """The distance between two shapes; see :func:`proximity.distance`."""
-    found = _instances(distance, a, b, method, max_distance, pose_b, True)
-    if found is not None:
-        return found
     if max_distance is None and pose_b is None:
         fast = _fast_for(a, b, method)
         if fast is not None:
             return fast.run(a, b)[1]
+    found = _instances(distance, a, b, method, max_distance, pose_b, True)
+    if found is not None:
+        return found
     a, b, pose_b, swap, _ = _poses(a, b, pose_b)
     names = ("b", "a") if swap else ("a", "b")
     out_shape, _, _, out = _answer(a, b, method, max_distance, False, names, pose_b)
