@@ -46,10 +46,11 @@ def unwrapped(shape):
             radius, core = float(core.radius), core.core
     if type(core) is not Scene or core._instanced is None:
         return None
+    from .pair_queries import _pose_of
+
     transform = None
     for view in reversed(poses):
-        pose = np.eye(4)
-        pose[:3, :3], pose[:3, 3] = view.rotation, view.translation
+        pose = _pose_of(view.rotation, view.translation)
         transform = pose if transform is None else pose @ transform
     return core, transform, radius
 

@@ -506,22 +506,20 @@ def _crossing_features(fa, fb):
 
 
 @inline
-def _touching(fa, fb, a, b, lw, lga, lgb, scale):
-    """``(found, answer)``: where the robust features are an edge crossing a face and the
-    triangles certainly intersect, the certified answer (distance 0, the crossing point as
-    both witnesses, the lowest crossing pair); ``found`` False otherwise."""
-    side, k = (-1, -1)
-    if _crossing_features(fa, fb):
-        side, k = _intersection(lw, lga, lgb)
+def _touching(a, b, lw, lga, lgb, scale):
+    """Where the triangles certainly intersect (their robust features an edge crossing a
+    face), the certified answer: distance 0, the crossing point as both witnesses, the
+    lowest crossing pair; a request for the exact fallback otherwise."""
+    side, k = _intersection(lw, lga, lgb)
     if side < 0:
-        return False, _FAIL
+        return _FAIL
     # The crossing point, as the robust method computes it, for both witnesses.
     c = _crossing_a(lw, lga, lgb, k) if side == 0 else _crossing_b(lw, lga, lgb, k)
     touching = (0.0, *c[1:])
     q = _finish(touching, (scale, scale, 1.0), a, b)
     fa = EDGE01 + k if side == 0 else FACE
     fb = FACE if side == 0 else EDGE01 + k
-    return True, (cf.CERTAIN, 0.0, 0.0, q[2], q[3], q[4], q[2], q[3], q[4], fa, fb, *q[10:])
+    return cf.CERTAIN, 0.0, 0.0, q[2], q[3], q[4], q[2], q[3], q[4], fa, fb, *q[10:]
 
 
 @part
@@ -545,7 +543,7 @@ def certified(a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b
     fa, fb = r[8], r[9]
     lga, lgb = _lead3(ga), _lead3(gb)
     if _crossing_features(fa, fb):
-        return _touching(fa, fb, a, b, lw, lga, lgb, scale)[1]
+        return _touching(a, b, lw, lga, lgb, scale)
     if not _verify(fa, fb, lw, lga, lgb):
         return _FAIL
     sh, sl, delta = _sqr(fa, fb, w, ga, gb)
@@ -569,6 +567,6 @@ def touching(
     without compiling the whole certified query into it."""
     args = (a0x, a0y, a0z, a1x, a1y, a1z, a2x, a2y, a2z, b0x, b0y, b0z, b1x, b1y, b1z, b2x, b2y, b2z)
     ok, zero, a, b, w, lw, ga, gb, scale = _exact_frame(args)
-    if not ok or zero:
+    if not ok or zero or not _crossing_features(fa, fb):
         return _FAIL
-    return _touching(fa, fb, a, b, lw, _lead3(ga), _lead3(gb), scale)[1]
+    return _touching(a, b, lw, _lead3(ga), _lead3(gb), scale)

@@ -105,7 +105,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     lower = np.empty(m)
     visit = np.empty(m, np.int64)
     pick = np.empty(m, np.int64)
-    near = _block_instances(block, inst, points, order, cutoff, lower)
+    near = _block_instances(block, inst, points, order, cutoff)
     # The previous point's closest point, in the world: its distance bounds
     # the next point's answer (points come in spatial order), as in
     # :func:`.traverse._search_block`.
@@ -229,10 +229,9 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
 
 
 @part
-def _block_instances(block, inst, points, order, cutoff, scratch):
+def _block_instances(block, inst, points, order, cutoff):
     """The instances that may hold the nearest primitive of a finite point of
-    ``block``, in increasing order (see the module docstring); ``scratch``
-    holds one float a instance."""
+    ``block``, in increasing order (see the module docstring)."""
     n = points.shape[0]
     m = inst.prototype.shape[0]
     lo_x, lo_y, lo_z = math.inf, math.inf, math.inf
@@ -259,6 +258,7 @@ def _block_instances(block, inst, points, order, cutoff, scratch):
         far = math.sqrt(fx * fx + fy * fy + fz * fz) + c[3]
         reach = min(reach, (far + slack * max(size, inst.box[a, 6])) * (1.0 + slack))
     # The lower bound of each instance over the box, lowered as a point's is.
+    near = np.empty(m, np.int64)
     count = 0
     for a in range(m):
         b = inst.box[a]
@@ -271,16 +271,10 @@ def _block_instances(block, inst, points, order, cutoff, scratch):
         sz = max(max(lo_z - c[2], c[2] - hi_z), 0.0)
         low = max(math.sqrt(dx * dx + dy * dy + dz * dz), math.sqrt(sx * sx + sy * sy + sz * sz) - c[3])
         slack = inst.slack[a]
-        scratch[a] = (low - slack * max(size, b[6])) / (1.0 + slack)
-        if not scratch[a] > reach:
-            count += 1
-    near = np.empty(count, np.int64)
-    count = 0
-    for a in range(m):
-        if not scratch[a] > reach:
+        if not (low - slack * max(size, b[6])) / (1.0 + slack) > reach:
             near[count] = a
             count += 1
-    return near
+    return near[:count]
 
 
 def _loop(handle, lo, hi, forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff):
