@@ -286,7 +286,10 @@ def _renumbered(index, offsets, posed):
         [np.arange(offsets[j], offsets[j + 1]) for j, inst in enumerate(posed) if not inst]
         or [np.zeros(0, int)]
     )
-    return frozen(numbers[index], dtype=np.int64, new=True)
+    from .broadphase._alloc import indices
+
+    # A tree keeps 32-bit indices: a scene numbering its loose primitives past 2**31 is refused.
+    return indices(numbers[index])
 
 
 def _summary(shape):

@@ -56,6 +56,28 @@ def take_rows(source, rows):
     return out
 
 
+#: The integers of a tree's topology (``child``, ``count``) and of its
+#: primitives' indices (``index``): four bytes, where eight would cost about
+#: 7 bytes a face more, and no tree comes near :data:`MOST_PRIMITIVES`.
+INDEX = np.int32
+#: The most primitives a tree holds: its nodes (``2 n - 1``) and indices fit in :data:`INDEX`.
+MOST_PRIMITIVES = 1 << 30
+
+
+def check_size(n, what="primitives"):
+    """Raise a ValueError unless ``n`` primitives fit a tree (:data:`MOST_PRIMITIVES`)."""
+    if n > MOST_PRIMITIVES:
+        raise ValueError(f"a hierarchy holds at most 2**30 = {MOST_PRIMITIVES:,} {what}; got {n:,}")
+
+
+def indices(array):
+    """``array`` (integers below ``2**31``) as a read-only :data:`INDEX` array, as a tree keeps them."""
+    array = np.asarray(array)
+    if array.dtype != INDEX and array.size and (array.min() < -(1 << 31) or array.max() >= 1 << 31):
+        raise ValueError(f"tree indices must be below 2**31; got {int(array.max()):,}")
+    return readonly(array, INDEX)
+
+
 def readonly(array, dtype):
     """``array`` as a C-contiguous read-only array of ``dtype`` (a view where it already is one)."""
     array = np.ascontiguousarray(array, dtype=dtype)

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
-from ._alloc import GATHER_MIN, empty, empty_ints, readonly, take_rows
+from ._alloc import GATHER_MIN, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
@@ -521,8 +521,8 @@ def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, 
     """
     kinds = readonly(kinds, np.int8)
     params = readonly(params, np.float64)
-    child = readonly(child, np.int64)
-    count = readonly(count, np.int64)
+    child = indices(child)
+    count = indices(count)
     if stored is not None:
         tight = loose = tight_ro = readonly(stored, np.float32)
     else:
@@ -543,7 +543,7 @@ def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, 
     return Tree(
         kinds=kinds,
         params=params,
-        index=readonly(index, np.int64),
+        index=indices(index),
         child=child,
         count=count,
         bounds=bounds,
@@ -567,7 +567,8 @@ def brute(kinds, params):
     Tree
     """
     n = len(kinds)
-    return assemble(kinds, params, np.arange(n), readonly([0], np.int64), readonly([n], np.int64), 0)
+    check_size(n)
+    return assemble(kinds, params, np.arange(n), [0], [n], 0)
 
 
 def build_tree(kinds, params, leaf_size=None):
@@ -584,7 +585,13 @@ def build_tree(kinds, params, leaf_size=None):
     Returns
     -------
     Tree
+
+    Raises
+    ------
+    ValueError
+        If there are more than ``2**30`` primitives.
     """
+    check_size(len(kinds))
     keep = distinct(kinds, params)
     kept = np.flatnonzero(keep)
     if len(kept) < len(kinds):
@@ -594,9 +601,10 @@ def build_tree(kinds, params, leaf_size=None):
     # The build puts the rows of ``tight`` in leaf order; the others follow.
     child, count, order, depth = _build(tight, size)
     loose = tight if loose is tight else take_rows(loose, order)
-    index = order if len(kept) == len(keep) else kept[order]
+    index = indices(order if len(kept) == len(keep) else kept[order])
     kinds, params = kinds[order], take_rows(params, order)
-    return assemble(kinds, params, index, child, count, depth, (tight, loose))
+    del order
+    return assemble(kinds, params, index, indices(child), indices(count), depth, (tight, loose))
 
 
 def build_faces(vertices, faces, kind, leaf_size=None):
@@ -605,6 +613,7 @@ def build_faces(vertices, faces, kind, leaf_size=None):
     their parameters in the faces' order: the faces' boxes, slabs and
     hashes come from the vertices in one pass, and their parameters are
     gathered once, in leaf order, :data:`FACE_COLUMNS` wide."""
+    check_size(len(faces), "faces")
     vertices = readonly(vertices, np.float64)
     faces = readonly(faces, np.int64)
     n = len(faces)
@@ -621,4 +630,8 @@ def build_faces(vertices, faces, kind, leaf_size=None):
     stored = stored_cull(cull)
     del cull, hashes
     params = face_params(vertices, faces, order, FACE_COLUMNS)
-    return assemble(kinds, params, order, child, count, depth, stored=stored)
+    # The topology in 32 bits before the nodes are fitted, the 64-bit arrays
+    # of the build let go: the build's peak is what it keeps.
+    index, child, count = indices(order), indices(child), indices(count)
+    del order
+    return assemble(kinds, params, index, child, count, depth, stored=stored)

@@ -43,7 +43,7 @@ from numba.core import types
 
 from .. import primitives
 from .._jit import launcher, part, specialize
-from ._alloc import readonly
+from ._alloc import indices, readonly
 from .traverse import (
     _C1I,
     _C2F,
@@ -328,16 +328,16 @@ def forest(trees, loose=False):
         cull.append(c)
         bounds.append(b)
         leaf = tree.count > 0
-        child.append(np.where(leaf, tree.child + rows, tree.child + nodes))
+        child.append(np.where(leaf, tree.child.astype(np.int64) + rows, tree.child.astype(np.int64) + nodes))
         count.append(tree.count)
         nodes += len(tree.child)
         rows += len(tree.kinds)
     ro = readonly
     arrays = TreeArrays(
         ro(np.concatenate(kinds), np.int8), ro(np.concatenate(params), np.float64),
-        ro(np.concatenate(index), np.int64), ro(np.concatenate(cull), np.float32),
-        ro(np.concatenate(bounds), np.float64), ro(np.concatenate(child), np.int64),
-        ro(np.concatenate(count), np.int64),
+        indices(np.concatenate(index)), ro(np.concatenate(cull), np.float32),
+        ro(np.concatenate(bounds), np.float64), indices(np.concatenate(child)),
+        indices(np.concatenate(count)),
     )  # fmt: skip
     radius = width - 1 if width > primitives.N_PARAMS else -1
     depth = max(tree.depth for tree in trees)

@@ -141,7 +141,9 @@ def _array(dtype, ndim, readonly=True):
 _F1, _F2, _I1 = _array(types.float64, 1), _array(types.float64, 2), _array(types.int64, 1)
 # The cull rows as trees keep them, in float32 (see proximity.broadphase.bounds.stored_cull).
 _C2 = _array(types.float32, 2)
-_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _I1, _C2, _F2, _I1, _I1, _F2, _F2], PairTree)
+# A tree's index, child and count (proximity.broadphase._alloc.INDEX).
+_N1 = _array(types.int32, 1)
+_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _N1, _C2, _F2, _N1, _N1, _F2, _F2], PairTree)
 _QUERIES = types.NamedTuple([_I1, _I1, _F1, _F1, _F1], Queries)
 _W1, _W2 = _array(types.float64, 1, False), _array(types.float64, 2, False)
 _WI, _W8 = _array(types.int64, 1, False), _array(types.int8, 1, False)
@@ -388,7 +390,7 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
             split_a = leaf_b or (not leaf_a and size(bounds_a, na) >= size(bounds_b, nb))
             # The frame of the node kept is computed once for both children.
             if split_a:
-                c1, c2 = child_a[na], child_a[na] + 1
+                c1, c2 = np.int64(child_a[na]), child_a[na] + 1
                 fb = node_frame(bounds_b, frames_b, nb, pose, s, POSED)
                 box_b = posed_box(bounds_b, nb, pose, s, POSED)
                 box_1, box_2 = plain_box(bounds_a, c1, s), plain_box(bounds_a, c2, s)
@@ -400,7 +402,7 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
                     d2 = lb2(node_frame(bounds_a, frames_a, c2, pose, s, False), box_2, fb, box_b, limit)
                 o1, o2 = nb, nb
             else:
-                o1, o2 = child_b[nb], child_b[nb] + 1
+                o1, o2 = np.int64(child_b[nb]), child_b[nb] + 1
                 fa = node_frame(bounds_a, frames_a, na, pose, s, False)
                 box_a = plain_box(bounds_a, na, s)
                 box_1, box_2 = (
@@ -583,7 +585,7 @@ def from_tree(tree):
 def forest(kinds, params):
     """A batch of primitives as a :class:`PairTree` of one-primitive leaves: node ``k`` holds
     primitive ``k``, bounded by its box and its slab; queries start at its leaves."""
-    from ._alloc import readonly
+    from ._alloc import indices, readonly
     from .bounds import primitive_cull, stored_cull
 
     cull = primitive_cull(kinds, params)[0]
@@ -594,8 +596,8 @@ def forest(kinds, params):
     bounds[:, 14::5] = -math.inf
     bounds[:, 15::5] = math.inf
     kinds, params = readonly(kinds, np.int8), readonly(params, np.float64)
-    index, bounds = readonly(np.arange(n), np.int64), readonly(bounds, np.float64)
-    child, count = readonly(np.arange(n), np.int64), readonly(np.ones(n), np.int64)
+    index, bounds = indices(np.arange(n)), readonly(bounds, np.float64)
+    child, count = indices(np.arange(n)), indices(np.ones(n, np.int64))
     frames, rep = node_arrays(kinds, params, bounds, child, count)
     stored = readonly(stored_cull(cull), np.float32)
     return PairTree(kinds, params, index, stored, bounds, child, count, frames, rep)

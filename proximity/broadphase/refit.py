@@ -13,7 +13,7 @@ from numba import prange
 
 from .. import _pool, _threads, primitives
 from .._jit import inline, kernel, spliced
-from ._alloc import empty, empty_ints, readonly
+from ._alloc import INDEX, empty, empty_ints, readonly
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
@@ -315,7 +315,7 @@ def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, c
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
-            _merge(bounds, i, bounds, child[i], child[i] + 2)
+            _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
     for t in range(n - 1, 0, -1):
         _frame_and_ranges(bounds, nodes[t], start, end, child, count, kinds, params, cull, vertices)
 
@@ -364,7 +364,7 @@ def _fit_faces(
         _gather_rows(vertices, faces, order, params, cull, start[root], end[root])
         _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, hull)
     for t in range(top.shape[0] - 1, -1, -1):
-        _merge(bounds, top[t], bounds, child[top[t]], child[top[t]] + 2)
+        _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
     for j in prange(tasks.shape[0]):
         _frame_and_ranges(bounds, tasks[j], start, end, child, count, kinds, params, cull, hull)
     for t in range(top.shape[0] - 1, -1, -1):
@@ -394,7 +394,7 @@ def _fit_step(step, lo, hi, bounds, start, end, child, count, kinds, params, cul
             else:
                 start[i] = start[child[i]]
                 end[i] = end[child[i] + 1]
-                _merge(bounds, i, bounds, child[i], child[i] + 2)
+                _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
     else:
         for i in range(lo, hi):
             _frame(bounds, i)
@@ -512,7 +512,7 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     vertices, faces, order = (
         readonly(vertices, np.float64),
         readonly(faces, np.int64),
-        readonly(order, np.int64),
+        readonly(order, INDEX),
     )
     if len(child) == 1:
         _gather_faces(vertices, faces, order, params, cull)

@@ -47,10 +47,12 @@ Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C2F32 = types.Array(types.float32, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
+#: A tree's ``index``, ``child`` and ``count`` (:data:`~._alloc.INDEX`).
+_C1N = types.Array(types.int32, 1, "C", readonly=True)
 _OUT1 = types.Array(types.float64, 1, "C")
 _OUT2 = types.Array(types.float64, 2, "C")
 _TREE = types.NamedTuple(
-    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1I, _C2F32, _C2F, _C1I, _C1I], TreeArrays
+    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1N, _C2F32, _C2F, _C1N, _C1N], TreeArrays
 )
 _OUTPUTS = types.NamedTuple(
     [_OUT1, _OUT1, _OUT2, types.Array(types.int8, 1, "C"), _OUT2, types.Array(types.boolean, 1, "C"),
@@ -142,7 +144,7 @@ def _descend(
                 limit = reach * reach
             node = -1
         else:
-            left = child[node]
+            left = np.int64(child[node])  # node numbers in int64: the bounds' tests compile once
             right = left + 1
             # The oriented box only where the box alone does not prune.
             dl = _box_sqr(bounds, left, s, qx, qy, qz)

@@ -19,13 +19,14 @@ class Tree:
     params : ndarray of float64, shape ``(n, N_PARAMS)``
         Each stored primitive's parameters (``FACE_COLUMNS`` wide in a tree
         of faces alone, one wider with radii).
-    index : ndarray of int64, shape ``(n,)``
+    index : ndarray of int32, shape ``(n,)``
         The caller's index of each stored primitive.
-    child, count : ndarray of int64, shape ``(m,)``
+    child, count : ndarray of int32, shape ``(m,)``
         Node topology: node ``i`` is a leaf holding stored primitives
         ``child[i] .. child[i] + count[i] - 1`` when ``count[i] > 0``, and
         otherwise has children ``child[i]`` and ``child[i] + 1``; one leaf
-        for brute force.
+        for brute force.  32-bit, as ``index``: a tree holds at most
+        ``2**30`` primitives (:data:`~._alloc.MOST_PRIMITIVES`).
     bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
         Node boxes and oriented boxes (see :func:`refit`).
     cull : ndarray of float32, shape ``(n, 11)``
