@@ -41,6 +41,9 @@ class Collection(Frozen):
     """
 
     __slots__ = ()
+    #: Whether its tree reads its primitives, faces, through ``vertices`` and
+    #: ``faces`` (:func:`proximity.broadphase.build.faces_reader`), as a mesh's does.
+    _reads_faces = False
     batch_shape = ()
     dim = 3
 
@@ -103,7 +106,9 @@ class Collection(Frozen):
         count = read_only(hierarchy["count"], np.int64)
         # Node bounds that pickles of earlier versions hold are not read.
         with _threads.kernel():
-            return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"])
+            build = broadphase.build
+            faces = build.faces_reader(self.vertices, self.faces, index) if self._reads_faces else None
+            return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"], faces=faces)
 
     def _query(self, points, method, full, max_distance=None):
         method = check_method(method, self.methods)

@@ -106,6 +106,7 @@ class TriangleMesh(Collection):
     """
 
     __slots__ = ("vertices", "faces", "broad_phase", "_tree", "_signs", "_winding", "_normals")
+    _reads_faces = True
     methods = TRIANGLE.methods
     result_type = MeshResult
 
@@ -702,9 +703,10 @@ class TriangleMesh(Collection):
                 v, self.faces, tree.index, tree.child, tree.count, tree.kinds
             )
             # The float32 rows it keeps on recycled memory too, as the refit's.
+            read = broadphase.build.faces_reader(v, self.faces, tree.index) if tree.indexed else None
             moved = broadphase.assemble(
                 tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
-                empty=_pool.empty,
+                empty=_pool.empty, faces=read,
             )  # fmt: skip
         mesh = object.__new__(TriangleMesh)
         mesh._init(

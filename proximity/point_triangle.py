@@ -686,41 +686,66 @@ def single_kernel(method):
     return specialize(_single, method.name, QUERY=KERNELS[method.name][0])
 
 
-# The query of a stored row of a collection (see :mod:`proximity.primitives`):
-# bound per method.
-ROW_QUERY = None
+# The query of a stored row of a collection (see :mod:`proximity.primitives`),
+# bound per method, and how the row's vertices are read, bound per layout.
+ROW_QUERY = CORNERS = None
+
+
+@inline
+def _row_corners(q, k):
+    """The vertices V0, V1, V2 of stored row ``k`` of rows ``q``: its first nine columns."""
+    return q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8]
+
+
+@inline
+def _indexed_corners(q, k):
+    """The vertices V0, V1, V2 of stored face ``k`` of ``q = (vertices, faces)``:
+    the rows ``faces[k]`` of ``vertices`` (a tree of faces, :class:`~.broadphase.tree.Tree`).
+    The same coordinates as the face's row would hold, so the same answers."""
+    vertices, faces = q
+    i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
+    return (
+        vertices[i, 0], vertices[i, 1], vertices[i, 2], vertices[j, 0], vertices[j, 1], vertices[j, 2],
+        vertices[m, 0], vertices[m, 1], vertices[m, 2],
+    )  # fmt: skip
 
 
 def _row(kind, q, k, px, py, pz):
     """Stored row ``k`` of ``q``: the vertices V0, V1, V2."""
-    st, d, sqr, x, y, z, f, b0, b1, b2 = ROW_QUERY(
-        q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz
-    )
+    x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, k)
+    st, d, sqr, x, y, z, f, b0, b1, b2 = ROW_QUERY(x0, y0, z0, x1, y1, z1, x2, y2, z2, px, py, pz)
     return st, d, sqr, x, y, z, f, b0, b1, b2, False
 
 
-def row_query(primitive, method):
-    """The query of a stored triangle row by ``method`` (see :mod:`proximity.primitives`)."""
-    return specialize(_row, method.name, role="inline", ROW_QUERY=KERNELS[method.name][0])
+def _corners(indexed):
+    return _indexed_corners if indexed else _row_corners
 
 
-@inline
+def row_query(primitive, method, indexed=False):
+    """The query of a stored triangle row by ``method`` (see :mod:`proximity.primitives`);
+    ``indexed``: of a face of a tree that reads its faces through their vertices."""
+    tag = method.name + ("_indexed" if indexed else "")
+    return specialize(_row, tag, role="inline", ROW_QUERY=KERNELS[method.name][0], CORNERS=_corners(indexed))
+
+
 def _interval(kind, q, k, px, py, pz):
     """Bounds ``(lo, hi)`` on the certified distance of stored row ``k``
     from the robust one: within ``8 eps S`` and one ulp of the exact one,
     below ``2 eps S``, with ``S`` at most ``1.75`` times the largest
     coordinate difference (``sqrt(3)`` and rounding)."""
-    d = robust(q[k, 0], q[k, 1], q[k, 2], q[k, 3], q[k, 4], q[k, 5], q[k, 6], q[k, 7], q[k, 8], px, py, pz)[0]
-    m = 0.0
-    for v in range(3):
-        m = max(m, max(max(abs(q[k, 3 * v] - px), abs(q[k, 3 * v + 1] - py)), abs(q[k, 3 * v + 2] - pz)))
+    x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, k)
+    d = robust(x0, y0, z0, x1, y1, z1, x2, y2, z2, px, py, pz)[0]
+    m = max(max(abs(x0 - px), abs(y0 - py)), abs(z0 - pz))
+    m = max(m, max(max(abs(x1 - px), abs(y1 - py)), abs(z1 - pz)))
+    m = max(m, max(max(abs(x2 - px), abs(y2 - py)), abs(z2 - pz)))
     w = 16.0 * EPS * (1.75 * m) + 5e-324  # the bound's absolute term, for subnormal distances
     return d - w, d + w
 
 
-def row_interval(primitive):
+def row_interval(primitive, indexed=False):
     """:func:`_interval`, the bounds of a stored triangle row's certified distance."""
-    return _interval
+    tag = "indexed" if indexed else "rows"
+    return specialize(_interval, tag, role="inline", CORNERS=_corners(indexed))
 
 
 def resolve(code, params, point):

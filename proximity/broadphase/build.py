@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
-from ._alloc import GATHER_MIN, check_size, empty, empty_ints, indices, readonly, take_rows
+from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
@@ -508,7 +508,51 @@ def face_params(vertices, faces, order=None, width=primitives.N_PARAMS):
     return params
 
 
-def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None, empty=np.empty):
+@kernel()
+def _renumber(faces, order, number, out):
+    """Each face ``faces[order[j]]``'s vertices renumbered into ``out[j]`` in the
+    order of their first use, ``number`` (-1 for none yet) the new number of
+    each vertex; returns how many vertices are used."""
+    used = 0
+    for j in range(order.shape[0]):
+        k = order[j]
+        for v in range(3):
+            i = faces[k, v]
+            if number[i] < 0:
+                number[i] = used
+                used += 1
+            out[j, v] = number[i]
+    return used
+
+
+def leaf_faces(vertices, faces, order):
+    """``(vertices, faces)`` of the faces ``faces[order]`` (leaf order) of
+    ``vertices``, as a tree reads them (:attr:`.tree.Tree.faces`): the
+    vertices they use, in the order of first use, and each face's three
+    rows of them (int32), so that the faces of a leaf read nearby rows."""
+    faces = readonly(faces, np.int64)
+    number = np.full(len(vertices), -1, np.int64)
+    out = np.empty((len(order), 3), np.int32)
+    used = _renumber(faces, readonly(order, INDEX), number, out)
+    first = np.empty(used, np.int64)
+    kept = np.flatnonzero(number >= 0)
+    first[number[kept]] = kept
+    out.flags.writeable = False
+    return readonly(take_rows(readonly(vertices, np.float64), first), np.float64), out
+
+
+def faces_reader(vertices, faces, index):
+    """A function giving :func:`leaf_faces` of the faces ``faces[index]`` (leaf
+    order), for :func:`assemble`; None where copies of a face were left out
+    (:func:`distinct`), whose tree keeps rows."""
+    if len(index) != len(faces):
+        return None
+    return lambda: leaf_faces(vertices, faces, index)
+
+
+def assemble(
+    kinds, params, index, child, count, depth, cull=None, bounds=None, stored=None, empty=np.empty, faces=None
+):
     """The :class:`Tree` of primitives already in leaf order, over the nodes ``child``, ``count``.
 
     ``cull`` is :func:`primitive_cull`'s ``(tight, loose)`` in that order,
@@ -517,7 +561,11 @@ def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, 
     without loose rows).  The tree keeps them as :func:`stored_cull` gives
     them, in float32, in arrays from ``empty(shape, dtype)``; a tree of
     unrounded hulls of points alone may give those rows (``stored``)
-    instead of ``cull``, having dropped the float64 ones.
+    instead of ``cull``, having dropped the float64 ones.  ``faces``: a
+    function giving :func:`leaf_faces` of a tree of faces, which then keeps
+    them instead of ``params``: called once the nodes are fitted and
+    ``params`` let go (the caller keeping no reference to them), so that the
+    build's peak holds the faces' rows or their vertices, not both.
     """
     kinds = readonly(kinds, np.int8)
     params = readonly(params, np.float64)
@@ -540,9 +588,14 @@ def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, 
         loose = readonly(loose, np.float64)
         loose_ro = readonly(stored_cull(loose, empty), np.float32)
         loose_bounds = readonly(refit(child, count, kinds, params, loose, loose_ro), np.float64)
+    read = (None, None)
+    if faces is not None:
+        del params
+        read = faces()
+        params = None
     return Tree(
         kinds=kinds,
-        params=params,
+        stored_params=params,
         index=indices(index),
         child=child,
         count=count,
@@ -551,6 +604,8 @@ def assemble(kinds, params, index, child, count, depth, cull=None, bounds=None, 
         loose_bounds=loose_bounds,
         loose_cull=loose_ro,
         depth=int(depth),
+        vertices=read[0],
+        faces=read[1],
     )
 
 
@@ -629,9 +684,13 @@ def build_faces(vertices, faces, kind, leaf_size=None):
     # points), which halves the build's peak.
     stored = stored_cull(cull)
     del cull, hashes
-    params = face_params(vertices, faces, order, FACE_COLUMNS)
     # The topology in 32 bits before the nodes are fitted, the 64-bit arrays
-    # of the build let go: the build's peak is what it keeps.
+    # of the build let go; the faces' rows, gathered for the fit alone, are
+    # held by assemble alone, which lets them go before the tree's vertices
+    # are gathered: the build's peak is what it keeps.
     index, child, count = indices(order), indices(child), indices(count)
     del order
-    return assemble(kinds, params, index, child, count, depth, stored=stored)
+    return assemble(
+        kinds, face_params(vertices, faces, index, FACE_COLUMNS), index, child, count, depth, stored=stored,
+        faces=lambda: leaf_faces(vertices, faces, index),
+    )  # fmt: skip

@@ -47,6 +47,7 @@ from ._alloc import indices, readonly
 from .traverse import (
     _C1I,
     _C2F,
+    _INDEXED_TREE,
     _OUTPUTS,
     _SENTINEL,
     _TREE,
@@ -78,13 +79,21 @@ _INSTANCES = types.NamedTuple(
     ],
     InstanceArrays,
 )
-# (block, forest, roots, magnitudes, depth, instances, points, order, outputs, full, cutoff)
-_BLOCK_SIGNATURE = types.void(
-    types.int64, _TREE, _C1I, types.Array(types.float64, 1, "C", readonly=True), types.int64,
-    _INSTANCES, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64,
-)  # fmt: skip
-# (handle, first block, end block, forest, ...)
-_LOOP_SIGNATURE = types.void(types.int64, types.int64, types.int64, *_BLOCK_SIGNATURE.args[1:])
+
+
+def _signatures(tree):
+    """The block's and the loop's signatures for forests of type ``tree``."""
+    # (block, forest, roots, magnitudes, depth, instances, points, order, outputs, full, cutoff)
+    block = types.void(
+        types.int64, tree, _C1I, types.Array(types.float64, 1, "C", readonly=True), types.int64,
+        _INSTANCES, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64,
+    )  # fmt: skip
+    # (handle, first block, end block, forest, ...)
+    return block, types.void(types.int64, types.int64, types.int64, *block.args[1:])
+
+
+#: A forest of one tree of faces read through their vertices has the indexed signatures.
+_SIGNATURES = {False: _signatures(_TREE), True: _signatures(_INDEXED_TREE)}
 
 #: The slack on an instance's world box, relative to the coordinates' magnitude.
 BOX_SLACK = 2.0**-40
@@ -290,18 +299,22 @@ def _blocks(forest, roots, magnitudes, depth, inst, points, *args):
 
 
 @functools.cache
-def instances_kernel(method, present, radius=-1):
-    """The compiled instanced search of ``method`` over forests of the kinds ``present``."""
+def instances_kernel(method, present, radius=-1, indexed=False):
+    """The compiled instanced search of ``method`` over forests of the kinds ``present``
+    (``indexed``: one tree of faces read through their vertices)."""
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
+    tag = method.name + ("_indexed" if indexed else "")
+    block_signature, loop_signature = _SIGNATURES[indexed]
     block = specialize(
         _instances_block,
-        f"{method.name}__{names}",
-        _BLOCK_SIGNATURE,
+        f"{tag}__{names}",
+        block_signature,
         role="pointer",
-        DESCEND=descent(method, present, radius),
+        DESCEND=descent(method, present, radius, indexed),
         SEED_POINT=not method.loose,
     )
-    return launcher(_loop, "instances", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE, _blocks, SEARCH_GRAIN)
+    loop = "instances_indexed" if indexed else "instances"
+    return launcher(_loop, loop, loop_signature, block, block_signature, _blocks, SEARCH_GRAIN)
 
 
 def forest(trees, loose=False):
@@ -311,9 +324,9 @@ def forest(trees, loose=False):
     boxes = [tree.boxes(loose) for tree in trees]
     if len(trees) == 1:
         (tree,), (bounds, cull, magnitude) = trees, boxes[0]
-        arrays = TreeArrays(tree.kinds, tree.params, tree.index, cull, bounds, tree.child, tree.count)
+        arrays = TreeArrays(tree.kinds, tree.rows(), tree.index, cull, bounds, tree.child, tree.count)
         return arrays, readonly([0], np.int64), readonly([magnitude], np.float64), tree.depth, tree.radius
-    width = max(tree.params.shape[1] for tree in trees)
+    width = max(tree.width for tree in trees)
     kinds, params, index, cull, bounds, child, count = [], [], [], [], [], [], []
     roots, magnitudes = [], []
     nodes = rows = 0
@@ -321,8 +334,9 @@ def forest(trees, loose=False):
         roots.append(nodes)
         magnitudes.append(magnitude)
         kinds.append(tree.kinds)
-        p = np.zeros((len(tree.params), width))
-        p[:, : tree.params.shape[1]] = tree.params
+        rows_of_tree = tree.params
+        p = np.zeros((len(rows_of_tree), width))
+        p[:, : rows_of_tree.shape[1]] = rows_of_tree
         params.append(p)
         index.append(tree.index)
         cull.append(c)
@@ -418,7 +432,7 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
     present = primitives.present(arrays.kinds)
     kinds = present if len(present) == 1 else primitives.offering(method)
     order = readonly(_visiting_order(points), np.int64)
-    search = instances_kernel(method, kinds, radius)
+    search = instances_kernel(method, kinds, radius, len(trees) == 1 and trees[0].indexed)
     search(arrays, roots, magnitudes, depth, instances, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):

@@ -106,7 +106,7 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
         undecided=np.empty(n),
     )
     bounds, cull, magnitude = tree.boxes(loose)
-    arrays = TreeArrays(tree.kinds, tree.params, tree.index, cull, bounds, tree.child, tree.count)
+    arrays = TreeArrays(tree.kinds, tree.rows(), tree.index, cull, bounds, tree.child, tree.count)
     order = readonly(_visiting_order(points), np.int64)
     # Work per point varies by orders of magnitude (a point at the center of
     # a sphere is equidistant from every face), so blocks are handed out
@@ -115,7 +115,7 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     # other, the one search for every kind that offers the method (not one
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
-    search = search_kernel(method, kinds, tree.radius)
+    search = search_kernel(method, kinds, tree.radius, tree.indexed)
     search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
@@ -144,7 +144,7 @@ def _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff):
             chosen = candidates[tree.kinds[candidates] == primitive.code]
             if len(chosen) == 0:
                 continue
-            r = primitive.kernels.resolve(primitive.code, tree.params[chosen], p)
+            r = primitive.kernels.resolve(primitive.code, tree.params_of(chosen), p)
             if tree.radius >= 0:  # rounded primitives: d - R, certified
                 rows = [(primitive, tree.params[k], p) for k in chosen]
                 radius = tree.params[chosen, tree.radius]

@@ -66,13 +66,16 @@ _cache = weakref.WeakKeyDictionary()
 
 
 def node_data(tree):
-    """``(frames, rep, magnitude)`` of a :class:`~.tree.Tree`: its nodes' frames and points,
-    and the largest finite coordinate magnitude of its root box, computed once per tree."""
+    """``(frames, rep, magnitude, params)`` of a :class:`~.tree.Tree`: its nodes' frames and
+    points, the largest finite coordinate magnitude of its root box, and its rows
+    (:attr:`~.tree.Tree.params`, gathered once where the tree reads its faces
+    through their vertices), computed once per tree."""
     data = _cache.get(tree)
     if data is None:
-        frames, rep = node_arrays(tree.kinds, tree.params, tree.bounds, tree.child, tree.count)
+        params = tree.params
+        frames, rep = node_arrays(tree.kinds, params, tree.bounds, tree.child, tree.count)
         root = [abs(x) for x in tree.bounds[0, :6].tolist() if math.isfinite(x)]
-        data = _cache[tree] = (frames, rep, max(root, default=0.0))
+        data = _cache[tree] = (frames, rep, max(root, default=0.0), params)
     return data
 
 

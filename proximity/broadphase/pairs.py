@@ -577,9 +577,9 @@ def descent_kernel(method, present, posed, radius_a, radius_b):
 
 def from_tree(tree):
     """The :class:`PairTree` of a collection's :class:`~.tree.Tree` (tight boxes)."""
-    frames, rep, _ = node_data(tree)
+    frames, rep, _, params = node_data(tree)
     t = tree
-    return PairTree(t.kinds, t.params, t.index, t.cull, t.bounds, t.child, t.count, frames, rep)
+    return PairTree(t.kinds, params, t.index, t.cull, t.bounds, t.child, t.count, frames, rep)
 
 
 def forest(kinds, params):

@@ -51,20 +51,35 @@ _C1I = types.Array(types.int64, 1, "C", readonly=True)
 _C1N = types.Array(types.int32, 1, "C", readonly=True)
 _OUT1 = types.Array(types.float64, 1, "C")
 _OUT2 = types.Array(types.float64, 2, "C")
-_TREE = types.NamedTuple(
-    [types.Array(types.int8, 1, "C", readonly=True), _C2F, _C1N, _C2F32, _C2F, _C1N, _C1N], TreeArrays
-)
+
+def _tree_type(rows):
+    """The Numba type of :data:`TreeArrays` whose ``params`` are of type ``rows``."""
+    return types.NamedTuple(
+        [types.Array(types.int8, 1, "C", readonly=True), rows, _C1N, _C2F32, _C2F, _C1N, _C1N], TreeArrays
+    )
+
+
+_TREE = _tree_type(_C2F)
+#: A tree of faces read through their vertices: ``params`` is ``(vertices, faces)`` (:meth:`.tree.Tree.rows`).
+_INDEXED_TREE = _tree_type(types.Tuple([_C2F, types.Array(types.int32, 2, "C", readonly=True)]))
 _OUTPUTS = types.NamedTuple(
     [_OUT1, _OUT1, _OUT2, types.Array(types.int8, 1, "C"), _OUT2, types.Array(types.boolean, 1, "C"),
      types.Array(types.int64, 1, "C"), _OUT1],
     Outputs,
 )  # fmt: skip
-# (block, tree, depth, magnitude, points, order, outputs, full, cutoff)
-_BLOCK_SIGNATURE = types.void(
-    types.int64, _TREE, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64
-)
-# (handle, first block, end block, tree, ...)
-_LOOP_SIGNATURE = types.void(types.int64, types.int64, types.int64, *_BLOCK_SIGNATURE.args[1:])
+
+
+def _signatures(tree):
+    """The block's and the loop's signatures for trees of type ``tree``."""
+    # (block, tree, depth, magnitude, points, order, outputs, full, cutoff)
+    block = types.void(
+        types.int64, tree, types.int64, types.float64, _C2F, _C1I, _OUTPUTS, types.boolean, types.float64
+    )
+    # (handle, first block, end block, tree, ...)
+    return block, types.void(types.int64, types.int64, types.int64, *block.args[1:])
+
+
+_SIGNATURES = {False: _signatures(_TREE), True: _signatures(_INDEXED_TREE)}
 
 # Bound per method and set of kinds by :func:`proximity._jit.specialize`:
 # the primitives' evaluation and interval (chains over the kinds, see
@@ -341,16 +356,20 @@ def _chain(present, make, tag):
 
 
 @functools.cache
-def descent(method, present, radius=-1):
-    """:func:`_descend` compiled for ``method``, the kinds ``present`` and the radius column."""
-    tag = method.name
+def descent(method, present, radius=-1, indexed=False):
+    """:func:`_descend` compiled for ``method``, the kinds ``present`` and the radius column;
+    ``indexed``: for a tree of faces read through their vertices (``present`` is the triangle alone)."""
+    suffix = "_indexed" if indexed else ""
+    tag = method.name + suffix
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
+    # Only the triangle reads its rows through vertices: the other kinds keep the one signature.
+    layout = {"indexed": True} if indexed else {}
     return specialize(
         _descend,
         f"{tag}__{names}",
         role="inline",
-        EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method), tag),
-        INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p), "interval"),
+        EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method, **layout), tag),
+        INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p, **layout), "interval" + suffix),
         EXACT_FALLBACK=method.exact_fallback,
         SEED_POINT=not method.loose,
         RADIUS=radius,
@@ -358,21 +377,24 @@ def descent(method, present, radius=-1):
 
 
 @functools.cache
-def search_kernel(method, present, radius=-1):
+def search_kernel(method, present, radius=-1, indexed=False):
     """The compiled search of ``method`` over trees holding the kinds
     ``present`` (:class:`~proximity.primitives.Primitive` records), with
     their radii in column ``radius`` of the rows (-1: none), as a function
-    of the loop's arguments but the handle."""
-    tag = method.name
+    of the loop's arguments but the handle; ``indexed``: over a tree of
+    faces read through their vertices (:meth:`.tree.Tree.rows`)."""
+    tag = method.name + ("_indexed" if indexed else "")
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
+    block_signature, loop_signature = _SIGNATURES[indexed]
     block = specialize(
         _search_block,
         f"{tag}__{names}",
-        _BLOCK_SIGNATURE,
+        block_signature,
         role="pointer",
-        DESCEND=descent(method, present, radius),
+        DESCEND=descent(method, present, radius, indexed),
     )
-    return launcher(_loop, "search", _LOOP_SIGNATURE, block, _BLOCK_SIGNATURE, _blocks, SEARCH_GRAIN)
+    loop = "search_indexed" if indexed else "search"
+    return launcher(_loop, loop, loop_signature, block, block_signature, _blocks, SEARCH_GRAIN)
 
 
 @kernel()

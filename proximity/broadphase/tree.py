@@ -16,9 +16,10 @@ class Tree:
     ----------
     kinds : ndarray of int8, shape ``(n,)``
         The kind code of each stored primitive (see :mod:`proximity.primitives`).
-    params : ndarray of float64, shape ``(n, N_PARAMS)``
+    stored_params : ndarray of float64, shape ``(n, N_PARAMS)``, or None
         Each stored primitive's parameters (``FACE_COLUMNS`` wide in a tree
-        of faces alone, one wider with radii).
+        of faces alone, one wider with radii); None in a tree of faces
+        read through their vertices (see :attr:`params`).
     index : ndarray of int32, shape ``(n,)``
         The caller's index of each stored primitive.
     child, count : ndarray of int32, shape ``(m,)``
@@ -36,10 +37,18 @@ class Tree:
         The same for ``eberly`` (the same arrays unless there are circles).
     depth : int
         Depth of the deepest leaf.
+    vertices : ndarray of float64, shape ``(V, 3)``, or None
+        A tree of faces (of a mesh): the vertices of its faces, in the order
+        in which the faces in leaf order first use them, so that a leaf's
+        vertices lie together in memory.
+    faces : ndarray of int32, shape ``(n, 3)``, or None
+        Each stored face's three rows of ``vertices``.  The search reads a
+        face's coordinates through them (:meth:`rows`): 24 bytes a face
+        and about 12 of vertices, where the faces' rows take 72.
     """
 
     kinds: np.ndarray
-    params: np.ndarray
+    stored_params: np.ndarray | None
     index: np.ndarray
     child: np.ndarray
     count: np.ndarray
@@ -48,6 +57,35 @@ class Tree:
     loose_bounds: np.ndarray
     loose_cull: np.ndarray
     depth: int
+    vertices: np.ndarray | None = None
+    faces: np.ndarray | None = None
+
+    @property
+    def indexed(self):
+        """Whether the faces are read through their vertices (:attr:`faces`)."""
+        return self.faces is not None
+
+    @property
+    def params(self):
+        """Each stored primitive's parameters, ``(n, columns)``; for a tree of
+        faces read through their vertices, their rows gathered anew at each
+        call (for the queries other than the nearest-face search)."""
+        if self.faces is None:
+            return self.stored_params
+        params = self.vertices[self.faces].reshape(len(self.faces), 9)
+        params.flags.writeable = False
+        return params
+
+    def params_of(self, rows):
+        """``params[rows]``, without gathering the other rows."""
+        if self.faces is None:
+            return self.stored_params[rows]
+        return self.vertices[self.faces[rows]].reshape(len(rows), 9)
+
+    def rows(self):
+        """What the search reads a stored primitive from: ``params``, or
+        ``(vertices, faces)`` in a tree of faces read through their vertices."""
+        return (self.vertices, self.faces) if self.faces is not None else self.stored_params
 
     @property
     def nodes(self):
@@ -63,7 +101,12 @@ class Tree:
     def radius(self):
         """The column of the rows' radii where the tree holds rounded
         primitives (rows one wider than :data:`~proximity.primitives.N_PARAMS`), else -1."""
-        return primitives.N_PARAMS if self.params.shape[1] > primitives.N_PARAMS else -1
+        return primitives.N_PARAMS if self.width > primitives.N_PARAMS else -1
+
+    @property
+    def width(self):
+        """The number of columns of :attr:`params`."""
+        return 9 if self.faces is not None else self.stored_params.shape[1]
 
     @property
     def loose(self):
