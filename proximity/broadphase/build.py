@@ -25,6 +25,10 @@ from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, store
 from .refit import refit
 from .tree import Tree
 
+#: The column of a face's first vertex index in the cull rows of a tree of
+#: faces read through their vertices (see :attr:`.tree.Tree.faces`).
+FACE_INDEX = CULL_COLUMNS
+
 LEAF_SIZE = 4
 #: Most primitives a leaf holds in a tree over at least :data:`LARGE_TREE`
 #: primitives (see :func:`default_leaf_size`).
@@ -591,8 +595,15 @@ def assemble(
     read = (None, None)
     if faces is not None:
         del params
-        read = faces()
+        vertices, corners = faces()
         params = None
+        # Each face's vertex indices in its cull row, in the cache line the
+        # search reads before it evaluates the face.
+        wide = empty((len(corners), FACE_INDEX + 3), np.float32)
+        wide[:, :FACE_INDEX] = tight_ro
+        wide.view(np.int32)[:, FACE_INDEX:] = corners
+        tight_ro = loose_ro = readonly(wide, np.float32)
+        read = (vertices, readonly(wide.view(np.int32), np.int32))
     return Tree(
         kinds=kinds,
         stored_params=params,

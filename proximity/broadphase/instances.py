@@ -44,6 +44,7 @@ from numba.core import types
 from .. import primitives
 from .._jit import launcher, part, specialize
 from ._alloc import indices, readonly
+from .bounds import CULL_COLUMNS
 from .traverse import (
     _C1I,
     _C2F,
@@ -339,7 +340,7 @@ def forest(trees, loose=False):
         p[:, : rows_of_tree.shape[1]] = rows_of_tree
         params.append(p)
         index.append(tree.index)
-        cull.append(c)
+        cull.append(c[:, :CULL_COLUMNS])
         bounds.append(b)
         leaf = tree.count > 0
         child.append(np.where(leaf, tree.child.astype(np.int64) + rows, tree.child.astype(np.int64) + nodes))

@@ -41,10 +41,11 @@ class Tree:
         A tree of faces (of a mesh): the vertices of its faces, in the order
         in which the faces in leaf order first use them, so that a leaf's
         vertices lie together in memory.
-    faces : ndarray of int32, shape ``(n, 3)``, or None
-        Each stored face's three rows of ``vertices``.  The search reads a
-        face's coordinates through them (:meth:`rows`): 24 bytes a face
-        and about 12 of vertices, where the faces' rows take 72.
+    faces : ndarray of int32, shape ``(n, 14)``, or None
+        The cull rows seen as int32, whose last three columns hold each
+        stored face's three rows of ``vertices``: the search reads a face's
+        coordinates through them (:meth:`rows`), 12 bytes a face and about
+        12 of vertices where the faces' rows take 72.
     """
 
     kinds: np.ndarray
@@ -72,7 +73,7 @@ class Tree:
         call (for the queries other than the nearest-face search)."""
         if self.faces is None:
             return self.stored_params
-        params = self.vertices[self.faces].reshape(len(self.faces), 9)
+        params = self.vertices[self.faces[:, -3:]].reshape(len(self.faces), 9)
         params.flags.writeable = False
         return params
 
@@ -80,7 +81,7 @@ class Tree:
         """``params[rows]``, without gathering the other rows."""
         if self.faces is None:
             return self.stored_params[rows]
-        return self.vertices[self.faces[rows]].reshape(len(rows), 9)
+        return self.vertices[self.faces[rows, -3:]].reshape(len(rows), 9)
 
     def rows(self):
         """What the search reads a stored primitive from: ``params``, or
