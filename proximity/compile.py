@@ -59,6 +59,8 @@ def _jobs(method):
         ]  # fmt: skip
     for p in primitives.offering(m):
         jobs.append((f"collection of {p.name}s: {name}", lambda p=p: search_kernel(m, (p,))))
+    if primitives.TRIANGLE in primitives.offering(m):  # a mesh's tree reads its faces through their vertices
+        jobs.append((f"mesh: {name}", lambda: search_kernel(m, (primitives.TRIANGLE,), -1, True)))
     jobs.append((f"collection of several kinds: {name}", lambda: search_kernel(m, primitives.offering(m))))
     return jobs
 

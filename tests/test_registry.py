@@ -75,8 +75,9 @@ def test_compile_all_covers_every_method():
     for name in methods.REGISTRY:
         offering = primitives.offering(methods.resolve(name))
         modules = {p.module for p in offering}
-        # One point, pairs and one shape per kernel module; a collection of each kind and of several.
-        expected = 3 * len(modules) + len(offering) + 1
+        # One point, pairs and one shape per kernel module; a collection of each kind and of several;
+        # and a mesh's, whose tree reads its faces through their vertices.
+        expected = 3 * len(modules) + len(offering) + 1 + (primitives.TRIANGLE in offering)
         assert sum(f": {name}" in job for job in jobs) == expected, name
 
 
