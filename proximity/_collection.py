@@ -81,6 +81,7 @@ class Collection(Frozen):
             "child": tree.child,
             "count": tree.count,
             "depth": tree.depth,
+            "faces": tree.indexed,  # whether it reads its faces through their vertices
         }
         return state
 
@@ -107,7 +108,8 @@ class Collection(Frozen):
         # Node bounds that pickles of earlier versions hold are not read.
         with _threads.kernel():
             build = broadphase.build
-            faces = build.faces_reader(self.vertices, self.faces, index) if self._reads_faces else None
+            read = self._reads_faces and hierarchy.get("faces", False)
+            faces = build.faces_reader(self.vertices, self.faces, index) if read else None
             return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"], faces=faces)
 
     def _query(self, points, method, full, max_distance=None):

@@ -37,6 +37,7 @@ coordinates' magnitude.
 import collections
 import functools
 import math
+import weakref
 
 import numpy as np
 from numba.core import types
@@ -318,6 +319,21 @@ def instances_kernel(method, present, radius=-1, indexed=False):
     return launcher(_loop, loop, loop_signature, block, block_signature, _blocks, SEARCH_GRAIN)
 
 
+#: The rows of trees of faces read through their vertices, gathered once for
+#: the forests of several trees that they join (a forest is made per query).
+_ROWS = weakref.WeakKeyDictionary()
+
+
+def _rows(tree):
+    """:attr:`.tree.Tree.params` of ``tree``, kept while it lives where it is gathered."""
+    if not tree.indexed:
+        return tree.params
+    rows = _ROWS.get(tree)
+    if rows is None:
+        rows = _ROWS[tree] = tree.params
+    return rows
+
+
 def forest(trees, loose=False):
     """The prototypes' trees as one: ``(TreeArrays, roots, magnitudes, depth,
     radius column)``; one tree is used as it is, several are concatenated
@@ -335,7 +351,7 @@ def forest(trees, loose=False):
         roots.append(nodes)
         magnitudes.append(magnitude)
         kinds.append(tree.kinds)
-        rows_of_tree = tree.params
+        rows_of_tree = _rows(tree)
         p = np.zeros((len(rows_of_tree), width))
         p[:, : rows_of_tree.shape[1]] = rows_of_tree
         params.append(p)
