@@ -1,25 +1,57 @@
-"""Mesh against mesh: the distance between two posed meshes, against python-fcl and coal.
+"""Mesh against mesh: the distance between two posed meshes, against python-fcl, coal, trimesh and pybullet.
 
     python -m benchmarks.pairs [--quick] [--out DIR] [--seed 0]
 
-**The pair.**  An icosphere of 20,480 faces (radius 1) and a torus of
-20,480 faces (radii 1 and 0.35; ``--quick``: 1,280 faces each), the torus
-turned at random and moved along a random direction until the two are
-about ``gap`` apart (by proximity's own answer), for gaps 1, 1e-2 and
-1e-4, and then moved 0.05 further in to overlap; 5 poses per gap
-(``--quick``: 2).  Every library answers the same pairs of posed meshes,
-its hierarchies built once outside the timing:
+**The pairs.**  An icosphere (radius 1) against a torus (radii 1 and 0.35)
+at two sizes, a table each: 5,120 faces each (``icosphere(4)``,
+``torus(64, 40)``) and 20,480 each (``icosphere(5)``, ``torus(128, 80)``;
+``--quick``: 320 and 1,280).  The torus is turned at random and moved along
+a random direction until the two are about ``gap`` apart (by proximity's
+own answer), for gaps 1, 1e-2 and 1e-4, and then moved 0.05 further in to
+overlap; 5 poses per gap (``--quick``: 2), the same directions and turns at
+both sizes.  Every library answers the same pairs of posed meshes, its
+hierarchies built once outside the timing (but where said):
 
 * proximity: ``proximity.distance(sphere, torus.transformed(T))``, the
   ``robust`` and the ``certified`` method, one thread (one query);
 * python-fcl: ``fcl.distance`` of two ``CollisionObject`` over
   ``BVHModel`` (OBBRSS), the torus's moved by ``setTransform``;
 * coal: ``coal.distance`` of two ``BVHModelOBBRSS`` with their
-  ``Transform3s``.
+  ``Transform3s``;
+* trimesh (python-fcl behind it), ``CollisionManager.min_distance_other``
+  between two managers of one mesh each, the torus's moved by
+  ``set_transform``.  trimesh makes a mesh it finds convex (the icosphere)
+  an ``fcl.Convex`` and the torus a ``BVHModel``, and asks for signed
+  distances: overlapping meshes give a negative number that is not the
+  depth;
+* trimesh, ``min_distance_single(torus, transform=T)`` against a manager
+  holding the icosphere: it builds the torus's hierarchy again in every
+  call, and the time includes that build;
+* pybullet, ``getClosestPoints`` between two static bodies in a ``DIRECT``
+  client, the torus's moved by ``resetBasePositionAndOrientation`` (its
+  rotation as a quaternion).  pybullet 3.2 makes ``createCollisionShape(
+  GEOM_MESH, vertices=..., indices=...)`` a BVH triangle mesh whatever the
+  mass and flags, and ``vertices=...`` alone their convex hull; a pair of
+  triangle meshes has no collision algorithm and reports no points at all.
+  Three models, as its users choose: *both meshes* (no answer, shown as
+  such), *sphere hull to mesh* (the icosphere's hull, which is the
+  icosphere, against the torus's triangles: the right shapes; each call
+  runs GJK between the hull and every triangle near the sphere's box, so
+  its cost grows with the faces of both) and *both hulls* (fast, but the
+  torus's hull fills its hole).  The threshold passed is ``1.1 gap +
+  1e-3`` (overlapping: 1e-3), a distance the caller knew the answer to be
+  within: pybullet's best case (a threshold of 2 took 3-9 times longer at
+  20,480 faces).  As the point adapter ``adapters/pybullet_backend.py``,
+  each body's collision margin is set to 0 (default 0.001), read back and
+  added to the distance (pybullet reports the distance between the shapes
+  grown by their margins; the nearest of its points is kept).
 
 A peer that is not installed, or fails to import, is skipped.  Timing: each
 pose's query is repeated (5 times, ``--quick``: 2) by each library in
-turn, the least time kept; the table gives the median over the poses.
+turn, the least time kept; the table gives the median over the poses.  The
+slow ones, ``min_distance_single`` and pybullet's sphere hull to mesh
+(marked ``*``; 40-120 ms and 50-1,500 ms a call here), are timed on one
+call per pose, whose answer is the one checked.
 
 **Accuracy** against the exact minimum over all pairs of faces of the
 torus posed in float64 (``torus.transformed(T)``'s vertices ``R V + t``
@@ -31,9 +63,9 @@ those faces are evaluated by the ``robust`` triangle pair, and those whose
 answer could be the least (within twice its bound) in rational arithmetic
 (:mod:`proximity.testing.exact`).  A negative answer of a peer (its
 convention for "in collision") counts as 0.  The table gives the largest
-absolute error over the poses.
+absolute error over the poses, and how many poses had no answer.
 
-**Hausdorff distance.**  The same two meshes, the torus turned at random
+**Hausdorff distance.**  The larger two meshes, the torus turned at random
 and moved 0.5 along a random direction (3 poses, ``--quick``: 2):
 ``proximity.hausdorff_distance(sphere, torus.transformed(T))`` (``robust``,
 ``rtol=1e-6``), its certified bounds and the time of the call; beside it,
@@ -57,7 +89,8 @@ pairs (``--quick``: 40).
 
 ``OUT/pairs.json`` holds the raw data; the project's targets (proximity at
 least 2x faster than python-fcl and coal at a gap of 1e-2, batched
-primitive pairs at least 20x coal's rate per call) are checked apart in
+primitive pairs at least 20x coal's rate per call; the meshes of 20,480
+faces, ``--quick``: 1,280) are checked apart in
 ``OUT/checks-pairs.txt``.
 """
 

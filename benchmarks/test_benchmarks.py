@@ -146,6 +146,33 @@ def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
         assert (expected == 0) == (gap < 0)
 
 
+def test_the_mesh_pair_rows_hold_every_library_or_why_it_was_skipped():
+    import numpy as np
+
+    from benchmarks import pairs
+    from proximity.testing.meshes import icosphere, torus
+
+    rng = np.random.default_rng(0)
+    rows, gaps = pairs.mesh_pair(icosphere(1), torus(8, 6), rng, 1, 2, log=lambda _: None)
+    assert set(rows) == {key for key, *_ in pairs.LIBRARIES}
+    assert [row["gap"] for row in gaps] == list(pairs.GAPS)
+    for row in gaps:
+        for key, result in row["libraries"].items():
+            assert len(result["answers"]) == 1 and result["missing"] == (result["answers"][0] is None)
+            assert (result["error"] is None) == bool(result["missing"])
+            if key in ("robust", "certified"):
+                assert result["error"] <= 1e-15
+        if "pybullet_meshes" in row["libraries"]:  # two triangle meshes: pybullet reports no points
+            assert row["libraries"]["pybullet_meshes"]["answers"] == [None]
+    size = {"faces": [80, 96], "rows": rows, "gaps": gaps}
+    lines = pairs.mesh_report(size, {"poses": 1, "repeats": 2})
+    blocks = sum(line.split()[:1] == ["gap"] for line in lines)
+    assert "icosphere of 80 faces" in lines[0] and blocks >= 1
+    assert sum(line.split()[:1] == ["overlap"] for line in lines) == blocks
+    missed, lines = pairs.checks({"meshes": [size]})
+    assert missed == sum(line.startswith("MISSED") for line in lines)
+
+
 def test_the_hausdorff_rows_bracket_a_sampled_estimate():
     import numpy as np
 
