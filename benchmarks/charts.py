@@ -118,12 +118,10 @@ CAPTIONS = {
     "stability_triangle": _STABILITY_CAPTION,
     "stability_round": _STABILITY_CAPTION,
     "stability_pairs": (
-        "What to look at: where a line rises above the dashed line (robust's pair bound, 16 eps·S, S the "
-        "largest coordinate difference between the two shapes' vertices) and where its failure share "
-        "(upper strip: no answer, or witness points off their shapes or not the distance apart) leaves 0. "
-        "python-fcl and coal answer segments as capsules of radius 0 and triangles as one-triangle "
-        "hierarchies (on triangle pairs their answers agree and their lines coincide); numpy is the "
-        "textbook segment formula (the lines' closest points, clamped)."
+        "What to look at: where a line rises above the dashed line (robust's pair bound, 16 eps·S) and where "
+        "its failure share (upper strip: no answer, or junk witness points) leaves 0. python-fcl and coal: "
+        "segments as capsules of radius 0, triangles as one-triangle hierarchies; numpy: the textbook "
+        "segment formula."
     ),
     "tessellation": (
         "What to look at: the gap between the libraries' lines and proximity's flat blue lines; "

@@ -456,8 +456,9 @@ NOTES = (
     "exception, no witness points, or witness points off their shapes or not the distance apart by more "
     "than 2^-16 S (junk, such as the points both libraries give crossing triangles). python-fcl and coal "
     "are asked one pair per call: a segment as a capsule of radius 0, a triangle as a one-triangle "
-    "hierarchy; a negative answer counts as 0. NumPy textbook: the closest points of the two lines, "
-    "clamped to the segments, as most code has it."
+    "hierarchy; a negative answer counts as 0. On triangle pairs the two give the same answers (their "
+    "lines in the chart coincide). NumPy textbook: the closest points of the two lines, clamped to the "
+    "segments, as most code has it."
 )
 
 
