@@ -410,7 +410,8 @@ def _cell(records):
 
 
 def _values(members):
-    return ", ".join(str(next(iter(f["params"].values()))).replace("_", " ") for f in members)
+    values = [next(iter(f["params"].values())) for f in members]
+    return ", ".join(v.replace("_", " ") if isinstance(v, str) else f"{v:g}" for v in values)
 
 
 def table(raw, by_point=False):
