@@ -119,7 +119,7 @@ PEERS = {"fcl": "python-fcl", "coal": "coal"}
 WITNESS_TOLERANCE = 2.0**-16
 COORDINATES = 16 * 2.0**-52
 
-#: fcl's answer for a pair it has no distance function for.
+#: python-fcl's answer where it has no distance: a pair it has no function for, or an overflow.
 UNSUPPORTED = 1.7e308
 
 #: The section of ``docs/benchmarks.md`` this module owns.
