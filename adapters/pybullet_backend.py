@@ -72,6 +72,7 @@ import weakref
 import numpy as np
 
 from ._base import Backend, Failure, Raw, import_library, norm, plane_frame, polygon, pow2_scale
+from ._pairs import PairRaw, quaternion, segment_frames
 
 #: Radius of the probe sphere and of the circle's capsules, relative to the
 #: shape's size; pybullet refuses 0.  Added back to every distance.
@@ -79,6 +80,10 @@ PROBE_RADIUS = 1e-9
 
 IDENTITY = [0.0, 0.0, 0.0, 1.0]
 ORIGIN = [0.0, 0.0, 0.0]
+
+#: ``getClosestPoints``' distance threshold for pairs, in the scaled frame
+#: where both shapes lie in a box of size below 1.
+PAIR_REACH = 4.0
 
 #: Collision shapes created between two ``resetSimulation`` calls: removing a
 #: body does not free its collision shape.
@@ -131,7 +136,20 @@ class PybulletBackend(Backend):
     frame = "per shape: origin at a vertex or the center, scaled by a power of two"
     tessellated = ("circle",)
 
-    def __init__(self):
+    pair_models = {
+        "point": f"GEOM_SPHERE({PROBE_RADIUS:g}), added back",
+        "sphere": "GEOM_SPHERE(R)",
+        "segment": f"GEOM_CAPSULE({PROBE_RADIUS:g}, L), added back",
+        "capsule": "GEOM_CAPSULE(R, L)",
+        "triangle": "GEOM_MESH(1 triangle)",
+        "mesh": "GEOM_MESH(GEOM_FORCE_CONCAVE_TRIMESH)",
+    }
+    pair_hull = "GEOM_MESH(vertices alone: their convex hull)"
+    pair_probe = "getClosestPoints(body a, body b), the nearest of the points reported"
+    pair_frame = "per call: origin at the center of both shapes' boxes, scaled by a power of two"
+
+    def __init__(self, *, hull=True):
+        self.hull = bool(hull)
         self._p = load()
         self._client = self._p.connect(self._p.DIRECT)
         if self._client < 0:
@@ -247,6 +265,91 @@ class PybulletBackend(Backend):
             nearest[i] = best[5]
         return distance, nearest, failure
 
+    def _pair_bodies(self, s, origin, factor, hull):
+        """``(bodies, added)``: one body per member of side ``s`` in the scaled frame, and the
+        radius to add back to its distances (the probe radius standing in for 0)."""
+        p = self._p
+        rotation = s.rotation
+        position = (s.translation - origin) * factor
+        if s.kind == "mesh":
+            members = [(s.vertices * factor, s.faces, rotation, position)]
+        elif s.kind == "triangle":
+            members = [(v * factor, None, rotation, position) for v in s.vertices]
+        elif s.kind in ("segment", "capsule"):
+            frames, middle, length = segment_frames(s.vertices)
+            members = [
+                (length[k] * factor, None, rotation @ frames[k], rotation @ middle[k] * factor + position)
+                for k in range(len(s.vertices))
+            ]
+        else:
+            members = [(None, None, rotation, rotation @ v[0] * factor + position) for v in s.vertices]
+        bodies, added, margins = [], np.zeros(len(members)), []
+        for k, (geometry, faces, r, t) in enumerate(members):
+            radius = float(s.radius[k] * factor)
+            given = max(radius, PROBE_RADIUS)
+            added[k] = given - radius
+            if s.kind in ("point", "sphere"):
+                shape = self._call("createCollisionShape", p.GEOM_SPHERE, radius=given)
+            elif s.kind in ("segment", "capsule"):
+                shape = self._call("createCollisionShape", p.GEOM_CAPSULE, radius=given, height=float(geometry))
+            else:
+                if faces is None:
+                    options = dict(indices=[0, 1, 2])
+                elif hull:  # vertices alone: their convex hull
+                    options = {}
+                else:
+                    options = dict(indices=faces.ravel().tolist(), flags=p.GEOM_FORCE_CONCAVE_TRIMESH)
+                shape = self._call("createCollisionShape", p.GEOM_MESH, vertices=geometry.tolist(), **options)
+            self._created += 1
+            body = self._call(
+                "createMultiBody",
+                baseMass=0,
+                baseCollisionShapeIndex=shape,
+                basePosition=t.tolist(),
+                baseOrientation=quaternion(r).tolist(),
+            )
+            bodies.append(body)
+            self._call("changeDynamics", body, -1, collisionMargin=0.0)
+            if s.kind in ("triangle", "mesh"):  # spheres and capsules report their radius
+                margins.append(self._call("getDynamicsInfo", body, -1)[-1] / factor)
+        return bodies, added, margins
+
+    def _pairs(self, query):
+        if self.closed:
+            raise RuntimeError("this pybullet backend is closed")
+        a, b = query.a, query.b
+        origin, factor = _pair_frame(a, b)
+        # pybullet answers a concave mesh only as a static one, and two static concave meshes
+        # not at all; a mesh against a mesh is given b's convex hull, as a body that moves.
+        hull = self.hull and a.kind == b.kind == "mesh"
+        raw = PairRaw.empty(query.n, hull=("b",) if hull else ())
+        self._fresh_world()
+        made = []
+        try:
+            bodies_a, added_a, margins = self._pair_bodies(a, origin, factor, False)
+            made += bodies_a
+            bodies_b, added_b, more = self._pair_bodies(b, origin, factor, hull)
+            made += bodies_b
+            for i in range(query.n):
+                ka, kb = a.index[i], b.index[i]
+                contacts = self._call("getClosestPoints", bodies_a[ka], bodies_b[kb], PAIR_REACH)
+                if not contacts:
+                    raw.failure[i] = Failure.NO_RESULT
+                    continue
+                best = min(contacts, key=lambda c: c[8])
+                raw.distance[i] = (best[8] + added_a[ka] + added_b[kb]) / factor
+                raw.point_a[i] = np.asarray(best[5]) / factor + origin
+                raw.point_b[i] = np.asarray(best[6]) / factor + origin
+        except self._p.error:
+            raw.failure[:] = Failure.EXCEPTION
+            raw.distance[:] = np.nan
+        finally:
+            for body in made:
+                self._call("removeBody", body)
+        return PairRaw(
+            raw.distance, raw.point_a, raw.point_b, raw.failure, hull=raw.hull, margin=max(margins + more)
+        )
+
     def _triangles(self, query):
         def describe(k):
             v = query.vertices[k]
@@ -327,3 +430,17 @@ class PybulletBackend(Backend):
             return create, [(ORIGIN, IDENTITY)], origin, factor, 0.0
 
         return self._run(query, describe)
+
+
+# -- pair queries ---------------------------------------------------------------------------
+
+
+def _pair_frame(a, b):
+    """One frame for every row: ``(origin, factor)``, the boxes' center and a power of two
+    that brings the pairs' extent into ``[0.5, 1)``."""
+    boxes = [s.extent() for s in (a, b)]
+    low = np.min([box[0].min(axis=0) for box in boxes], axis=0)
+    high = np.max([box[1].max(axis=0) for box in boxes], axis=0)
+    origin = low * 0.5 + high * 0.5
+    size = max(float(np.max(high - low)), float(a.radius.max(initial=0.0)), float(b.radius.max(initial=0.0)))
+    return origin, float(pow2_scale(size))
