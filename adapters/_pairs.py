@@ -189,7 +189,8 @@ def side(shape, name, out_shape):
     index = np.broadcast_to(np.arange(count).reshape(batch), out_shape).reshape(-1)
     r = np.zeros(count) if radius is None else np.broadcast_to(radius, batch).reshape(-1).astype(np.float64)
     if isinstance(core, TriangleMesh) and radius is None:
-        kind, vertices, faces = "mesh", np.asarray(core.vertices, np.float64), np.asarray(core.faces, np.int64)
+        kind, faces = "mesh", np.asarray(core.faces, np.int64)
+        vertices = np.asarray(core.vertices, np.float64)
     elif type(core) in _KINDS and _KINDS[type(core)][radius is not None] is not None:
         kind, faces = _KINDS[type(core)][radius is not None], None
         v = np.asarray(core.position if type(core) is Point else core.vertices, np.float64)
@@ -382,11 +383,11 @@ def quaternion(rotation):
         q = [(m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w), (m[1, 0] - m[0, 1]) / (4 * w), w]
     else:
         i = k - 1
-        j, l = (i + 1) % 3, (i + 2) % 3
-        s = np.sqrt(1.0 + m[i, i] - m[j, j] - m[l, l]) / 2.0
-        q = [0.0, 0.0, 0.0, (m[l, j] - m[j, l]) / (4 * s)]
+        j, h = (i + 1) % 3, (i + 2) % 3
+        s = np.sqrt(1.0 + m[i, i] - m[j, j] - m[h, h]) / 2.0
+        q = [0.0, 0.0, 0.0, (m[h, j] - m[j, h]) / (4 * s)]
         q[i] = s
         q[j] = (m[j, i] + m[i, j]) / (4 * s)
-        q[l] = (m[l, i] + m[i, l]) / (4 * s)
+        q[h] = (m[h, i] + m[i, h]) / (4 * s)
     q = np.asarray(q)
     return q / np.linalg.norm(q)

@@ -210,9 +210,8 @@ class FclBackend(Backend):
         faces = {"a": raw.face_a, "b": raw.face_b}
         for i in range(query.n):
             result = fcl.DistanceResult()
-            d = fcl.distance(
-                objects[first.name][first.index[i]], objects[second.name][second.index[i]], self._request, result
-            )
+            one, other = objects[first.name][first.index[i]], objects[second.name][second.index[i]]
+            d = fcl.distance(one, other, self._request, result)
             if not (d < UNSUPPORTED):  # unsupported, or NaN
                 raw.failure[i] = Failure.SENTINEL
                 continue

@@ -291,7 +291,8 @@ class PybulletBackend(Backend):
             if s.kind in ("point", "sphere"):
                 shape = self._call("createCollisionShape", p.GEOM_SPHERE, radius=given)
             elif s.kind in ("segment", "capsule"):
-                shape = self._call("createCollisionShape", p.GEOM_CAPSULE, radius=given, height=float(geometry))
+                height = float(geometry)
+                shape = self._call("createCollisionShape", p.GEOM_CAPSULE, radius=given, height=height)
             else:
                 if faces is None:
                     options = dict(indices=[0, 1, 2])

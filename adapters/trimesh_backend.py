@@ -128,7 +128,8 @@ class TrimeshBackend(Backend):
             managers[s.name] = built
         raw = PairRaw.empty(query.n, face_a=np.full(query.n, -1), face_b=np.full(query.n, -1))
         for i in range(query.n):
-            d, data = managers["a"][a.index[i]].min_distance_other(managers["b"][b.index[i]], return_data=True)
+            other = managers["b"][b.index[i]]
+            d, data = managers["a"][a.index[i]].min_distance_other(other, return_data=True)
             raw.distance[i] = d
             raw.point_a[i], raw.point_b[i] = data.point("a"), data.point("b")
             raw.face_a[i], raw.face_b[i] = data.index("a"), data.index("b")
