@@ -90,8 +90,8 @@ class Failure(enum.IntEnum):
     #: distance is 0; the witness points are NaN.
     CONTACT = 8
     #: Pair queries: the library was given a mesh's convex hull (pybullet's
-    #: model of a mesh on a body that can move) and its witness point is not
-    #: on the mesh: the answer is the distance to the hull, not to the mesh.
+    #: model of a mesh on a body that can move) and its answer is the hull's:
+    #: a witness point off the mesh, or contact where the shapes are apart.
     CONVEX_HULL = 9
 
 
@@ -521,8 +521,6 @@ class Backend:
     #: Native model of each kind of side of a pair query, for :class:`Model`;
     #: the kinds the backend answers pairs of.
     pair_models = {}
-    #: Model of a mesh given as its convex hull.
-    pair_hull = ""
     #: How a pair is given to the library.
     pair_probe = ""
     #: Coordinates the library works in for pairs.

@@ -34,7 +34,7 @@ largest coordinate magnitude among them; ``rtol`` is the backend's for the
 pair of kinds (:meth:`Backend.pair_rtol`).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -129,8 +129,10 @@ class PairRaw:
     the library says so); ``point_a`` and ``point_b`` its witnesses in the
     world; ``failure`` the library-level codes (OK, NO_RESULT, SENTINEL,
     EXCEPTION); ``face_a``, ``face_b`` the faces of mesh sides where the
-    library reports them; ``hull`` the names of the sides the library was
-    given as their convex hull; ``margin`` the collision margin read back.
+    library reports them; ``hull`` the names of the mesh sides the library
+    was given as their convex hull; ``models`` the description of a side's
+    model where it is not the backend's ``pair_models`` entry; ``margin``
+    the collision margin read back.
     """
 
     distance: np.ndarray
@@ -140,6 +142,7 @@ class PairRaw:
     face_a: object = None
     face_b: object = None
     hull: tuple = ()
+    models: dict = field(default_factory=dict)
     margin: float = float("nan")
 
     @classmethod
@@ -237,7 +240,8 @@ def _translate(raw, a, b, tolerance, reference, out_shape):
     ok = failure == Failure.OK
     contact = ok & ~(distance > tolerance)
     false = contact & (reference > 2.0 * tolerance)
-    failure[false] = Failure.FALSE_TOUCHING
+    # Contact with a convex hull where the shapes are apart is the hull's doing.
+    failure[false] = Failure.CONVEX_HULL if raw.hull else Failure.FALSE_TOUCHING
     contact &= ~false
     ok &= ~false
     distance[contact] = 0.0
@@ -325,7 +329,7 @@ def closest_points(backend, a, b):
     model = Model(
         library=backend.library,
         primitive="; ".join(
-            f"{s.name}: {backend.pair_hull if s.name in raw.hull else kinds[s.kind]}" for s in (sa, sb)
+            f"{s.name}: {raw.models.get(s.name, kinds[s.kind])}" for s in (sa, sb)
         ),
         probe=backend.pair_probe,
         segments=np.zeros(out_shape, np.int64),

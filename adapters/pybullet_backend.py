@@ -67,6 +67,7 @@ Known biases, translated
   ``1e-12`` of the size.  The documented relative tolerance is ``1e-5``.
 """
 
+import dataclasses
 import weakref
 
 import numpy as np
@@ -80,6 +81,9 @@ PROBE_RADIUS = 1e-9
 
 IDENTITY = [0.0, 0.0, 0.0, 1.0]
 ORIGIN = [0.0, 0.0, 0.0]
+
+#: Kinds of pair side pybullet is given as a triangle mesh.
+CONCAVE_KINDS = ("triangle", "mesh")
 
 #: ``getClosestPoints``' distance threshold for pairs, in the scaled frame
 #: where both shapes lie in a box of size below 1.
@@ -265,9 +269,11 @@ class PybulletBackend(Backend):
             nearest[i] = best[5]
         return distance, nearest, failure
 
-    def _pair_bodies(self, s, origin, factor, hull):
-        """``(bodies, added)``: one body per member of side ``s`` in the scaled frame, and the
-        radius to add back to its distances (the probe radius standing in for 0)."""
+    def _pair_bodies(self, s, origin, factor, hull, made):
+        """``(bodies, added, margins)``: one body per member of side ``s`` in the scaled frame
+        (each also appended to ``made``), the radius to add back to its distances (the probe
+        radius standing in for 0), and the margins of mesh bodies; ``hull``: a triangle or
+        mesh is given as the convex hull of its vertices."""
         p = self._p
         rotation = s.rotation
         position = (s.translation - origin) * factor
@@ -294,10 +300,12 @@ class PybulletBackend(Backend):
                 height = float(geometry)
                 shape = self._call("createCollisionShape", p.GEOM_CAPSULE, radius=given, height=height)
             else:
-                if faces is None:
-                    options = dict(indices=[0, 1, 2])
-                elif hull:  # vertices alone: their convex hull
+                # With indices, pybullet builds a concave triangle mesh, which it pairs
+                # with convex shapes only; vertices alone are their convex hull.
+                if hull:
                     options = {}
+                elif faces is None:
+                    options = dict(indices=[0, 1, 2])
                 else:
                     options = dict(indices=faces.ravel().tolist(), flags=p.GEOM_FORCE_CONCAVE_TRIMESH)
                 shape = self._call("createCollisionShape", p.GEOM_MESH, vertices=geometry.tolist(), **options)
@@ -310,6 +318,7 @@ class PybulletBackend(Backend):
                 baseOrientation=quaternion(r).tolist(),
             )
             bodies.append(body)
+            made.append(body)
             self._call("changeDynamics", body, -1, collisionMargin=0.0)
             if s.kind in ("triangle", "mesh"):  # spheres and capsules report their radius
                 margins.append(self._call("getDynamicsInfo", body, -1)[-1] / factor)
@@ -320,17 +329,20 @@ class PybulletBackend(Backend):
             raise RuntimeError("this pybullet backend is closed")
         a, b = query.a, query.b
         origin, factor = _pair_frame(a, b)
-        # pybullet answers a concave mesh only as a static one, and two static concave meshes
-        # not at all; a mesh against a mesh is given b's convex hull, as a body that moves.
-        hull = self.hull and a.kind == b.kind == "mesh"
-        raw = PairRaw.empty(query.n, hull=("b",) if hull else ())
+        # pybullet pairs a concave triangle mesh (a triangle or mesh given with its
+        # indices) with convex shapes only: where both sides are triangles or meshes,
+        # b is given as the convex hull of its vertices (a triangle's is itself).
+        hull = self.hull and a.kind in CONCAVE_KINDS and b.kind in CONCAVE_KINDS
+        raw = PairRaw.empty(
+            query.n,
+            hull=("b",) if hull and b.kind == "mesh" else (),
+            models={"b": self.pair_hull} if hull else {},
+        )
         self._fresh_world()
-        made = []
+        made, margins, more = [], [], []
         try:
-            bodies_a, added_a, margins = self._pair_bodies(a, origin, factor, False)
-            made += bodies_a
-            bodies_b, added_b, more = self._pair_bodies(b, origin, factor, hull)
-            made += bodies_b
+            bodies_a, added_a, margins = self._pair_bodies(a, origin, factor, False, made)
+            bodies_b, added_b, more = self._pair_bodies(b, origin, factor, hull, made)
             for i in range(query.n):
                 ka, kb = a.index[i], b.index[i]
                 contacts = self._call("getClosestPoints", bodies_a[ka], bodies_b[kb], PAIR_REACH)
@@ -347,9 +359,10 @@ class PybulletBackend(Backend):
         finally:
             for body in made:
                 self._call("removeBody", body)
-        return PairRaw(
-            raw.distance, raw.point_a, raw.point_b, raw.failure, hull=raw.hull, margin=max(margins + more)
-        )
+        # Spheres and capsules report their radius as their margin: only meshes' are read.
+        margin = max(margins + more, default=0.0)
+        raw = PairRaw(raw.distance, raw.point_a, raw.point_b, raw.failure, hull=raw.hull, models=raw.models)
+        return dataclasses.replace(raw, margin=margin)
 
     def _triangles(self, query):
         def describe(k):

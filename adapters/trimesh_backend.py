@@ -126,13 +126,14 @@ class TrimeshBackend(Backend):
                 manager.add_object(s.name, mesh, transform=s.transform())
                 built.append(manager)
             managers[s.name] = built
-        raw = PairRaw.empty(query.n, face_a=np.full(query.n, -1), face_b=np.full(query.n, -1))
+        # trimesh's DistanceData names the face of one object only, the first one of fcl's
+        # broad phase (-1 for the other, whichever side): no face is reported.
+        raw = PairRaw.empty(query.n)
         for i in range(query.n):
             other = managers["b"][b.index[i]]
             d, data = managers["a"][a.index[i]].min_distance_other(other, return_data=True)
             raw.distance[i] = d
             raw.point_a[i], raw.point_b[i] = data.point("a"), data.point("b")
-            raw.face_a[i], raw.face_b[i] = data.index("a"), data.index("b")
         bad = ~np.isfinite(raw.distance)
         raw.failure[bad] = Failure.NO_RESULT
         return raw
