@@ -187,6 +187,40 @@ def test_contact_is_distance_zero_with_the_contact_code(backends):
     assert backends["fcl"].distance(flat, crossing) == 0.0
 
 
+def test_libraries_give_overlapping_solids_a_negative_distance_and_the_backends_contact(backends):
+    a = Capsule([[0, 0, -1], [0, 0, 1]], 0.5)
+    b = Capsule([[0.8, -1, 0.3], [0.8, 1, 0.3]], 0.5)  # axes 0.8 apart: 0.2 deep
+    assert float(proximity.signed_distance(a, b)) == pytest.approx(-0.2)
+    # fcl: the depth, with a point of each surface (not a common point)
+    request = fcl_lib.DistanceRequest(enable_nearest_points=True)
+    result = fcl_lib.DistanceResult()
+    x = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # a rotation taking z to y
+    d = fcl_lib.distance(
+        fcl_lib.CollisionObject(fcl_lib.Capsule(0.5, 2.0), fcl_lib.Transform()),
+        fcl_lib.CollisionObject(fcl_lib.Capsule(0.5, 2.0), fcl_lib.Transform(x, np.array([0.8, 0, 0.3]))),
+        request,
+        result,
+    )
+    assert d == pytest.approx(-0.2)
+    assert np.linalg.norm(result.nearest_points[0] - result.nearest_points[1]) == pytest.approx(0.2)
+    # trimesh: negative for overlapping meshes
+    import trimesh
+
+    ball = trimesh.Trimesh(*icosphere(1, 1.0), process=False)
+    first, second = trimesh.collision.CollisionManager(), trimesh.collision.CollisionManager()
+    first.add_object("a", ball)
+    moved = np.eye(4)
+    moved[0, 3] = 1.5
+    second.add_object("b", ball, transform=moved)
+    assert first.min_distance_other(second) < 0
+    for name in ("fcl", "pybullet"):
+        r = backends[name].closest_points(a, b)
+        assert r.failure == Failure.CONTACT and r.distance == 0.0 and np.isnan(r.point_a).all(), name
+    mesh = TriangleMesh(*icosphere(1, 1.0))
+    r = backends["trimesh"].closest_points(mesh, mesh.transformed(moved))
+    assert r.failure == Failure.CONTACT and r.distance == 0.0
+
+
 def test_a_degenerate_triangle_touching_in_fcl_is_false_touching(backends):
     # fcl's sphere against a degenerate BVH triangle is "touching" (as for the point queries);
     # its segment and triangle pairs measure it.
