@@ -37,6 +37,32 @@ Known biases, translated
 
 Away from these cases fcl agrees with proximity to a few ``eps`` of the
 coordinates; the documented relative tolerance is ``64 eps``.
+
+Pair queries
+------------
+One ``fcl.distance`` call per pair of ``CollisionObject`` s, nearest points
+requested.  A point is ``Sphere(0)``, a sphere ``Sphere(R)``, a segment
+``Capsule(0, L)``, a capsule ``Capsule(R, L)`` (rotated so that its axis is
+the segment), a triangle a one-triangle ``BVHModel`` (``TriangleP`` pairs
+have no distance: 1.797e308 with a warning) and a mesh one ``BVHModel``; a
+posed shape's pose is its object's ``Transform`` (composed with a capsule's
+own frame).  fcl reports the faces of both sides' BVH models
+(``DistanceResult.b1``, ``b2``), kept as ``face_a`` and ``face_b``.
+
+* A shape against a BVH model: fcl returns the BVH model's nearest point
+  first whatever the order asked, so BVH models are asked first; and a
+  sphere against a BVH model returns each nearest point in its own
+  object's frame, moved to the world by the backend.
+* In contact fcl returns -1, or 0 with nearest points that are not a
+  common point, or (capsules, spheres) the negative depth with a point on
+  each surface: distance 0 and ``CONTACT``.
+* A sphere against a degenerate triangle is "touching", as for points:
+  ``FALSE_TOUCHING``.
+* A capsule of radius > 0 against a BVH model is answered by GJK: on 1000
+  random capsule-triangle pairs distances were off by ``2e-8`` of the
+  pair's size at the median and ``7e-5`` at worst; the documented relative
+  tolerance of those pairs is ``1e-3`` (``64 eps`` for the others, met by
+  every pair measured).
 """
 
 import numpy as np

@@ -65,6 +65,28 @@ Known biases, translated
   (measured at a disk's rim), and points ``1e-7`` from a triangle can be
   reported touching.  Elsewhere distances agree with proximity to about
   ``1e-12`` of the size.  The documented relative tolerance is ``1e-5``.
+Pair queries
+------------
+``getClosestPoints`` between a body of each side (one per member of a
+batch), all built in one frame per call: the center of both shapes' boxes
+as origin, scaled by a power of two so that they fit in a box of size
+below 1.  A point is a ``GEOM_SPHERE`` of radius 1e-9 and a segment a
+``GEOM_CAPSULE`` of that radius (pybullet refuses 0), added back; spheres
+and capsules are ``GEOM_SPHERE(R)`` and ``GEOM_CAPSULE(R, L)``; a triangle
+is a ``GEOM_MESH`` given its indices and a mesh a
+``GEOM_FORCE_CONCAVE_TRIMESH``: both are triangle meshes.  A posed shape's
+pose is its body's position and orientation.  Margins are set to 0.
+
+* pybullet pairs a triangle mesh with convex shapes only: two of them give
+  no points at all.  Where both sides are triangles or meshes, b is given
+  as the convex hull of its vertices (its model of a mesh on a body that
+  moves; a triangle's hull is the triangle), and the answer is to that
+  hull: a witness off the mesh, or contact where the meshes are apart,
+  becomes ``CONVEX_HULL``.  ``PybulletBackend(hull=False)`` gives both as
+  triangle meshes, as pybullet pairs two static meshes: ``NO_RESULT``.
+* In overlap pybullet reports the negative depth, with a point of each
+  surface: distance 0 and ``CONTACT``.
+* Answers are GJK's, documented to the same ``1e-5`` relative tolerance.
 """
 
 import dataclasses
@@ -116,6 +138,13 @@ def _quaternion_z_to(direction):
 
 class PybulletBackend(Backend):
     """Closest points by pybullet, in a ``DIRECT`` client owned by the backend.
+
+    Parameters
+    ----------
+    hull : bool, optional
+        In a pair query between two triangles or meshes, give b as the
+        convex hull of its vertices (default True), without which pybullet
+        gives no answer; see the module docstring.
 
     Examples
     --------

@@ -48,6 +48,22 @@ distance can be too long by up to about ``1e-8 / (2 d)`` (5.5e-8 on a torus
 of 20,000 faces, for 2 of 200 points near its surface).  The answer is a
 point of the mesh at the distance reported, so the row stays ``OK``;
 :func:`proximity.adapters.cross_check` shows it as a disagreement beyond tolerance.
+Pair queries
+------------
+``CollisionManager.min_distance_other`` (which needs python-fcl) between
+one manager per side, each holding one ``Trimesh``: a triangle as a mesh
+of one face, a mesh as itself, a posed shape with its pose as the object's
+transform.  trimesh has no segment, sphere or capsule without tessellating
+it (and a segment as the degenerate triangle ``(A, B, B)`` would be
+"touching" everything in fcl): those raise ``NotImplementedError``.
+trimesh asks fcl for signed distances: overlapping shapes come back
+negative (not in general the depth) with points that are not a point of
+contact: distance 0 and ``CONTACT``.  fcl then answers pairs of faces by
+GJK: on a torus against a posed icosphere, distances were off by up to
+``3e-9`` of the pair's size, so the documented relative tolerance of mesh
+pairs is ``1e-6`` (``64 eps`` for triangle pairs, met by every pair
+measured).  Its ``DistanceData`` names the face of the first object of
+fcl's broad phase only, either side: no face is reported.
 """
 
 import numpy as np
