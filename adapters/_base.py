@@ -106,10 +106,12 @@ class Model:
     primitive : str
         The native model of one shape, e.g. ``"Cylinder(R, 0)"``.
     probe : str
-        How the query point was given to the library.
+        How the query point was given to the library; for a pair query,
+        how the pair was asked.
     segments : ndarray of int64, shape ``batch``
         Number of segments ``K`` of each tessellated shape; 0 where the
-        library was given an exact primitive.
+        library was given an exact primitive (always, for a pair query,
+        whose arrays have the broadcast shape of the pair).
     bound : ndarray of float64, shape ``batch``
         Hausdorff distance between each shape and its model: the sagitta
         ``R (1 - cos(pi / K))`` of a tessellated circle or disk, 0 otherwise.
@@ -167,7 +169,7 @@ class BackendResult:
 
     Attributes
     ----------
-    result : TriangleResult, DiskResult or CircleResult
+    result : TriangleResult, DiskResult, CircleResult, MeshResult or PairResult
         The same type proximity returns, of the broadcast shape.  Rows whose
         failure is not ``OK`` are NaN; fields listed in :attr:`unknown` are
         not given by the library: ``Feature.NONE`` for ``feature``, NaN for

@@ -301,7 +301,7 @@ def closest_points(backend, a, b):
             f"it takes {', '.join(kinds)}"
         )
     query = PairQuery(sa, sb, int(reference.size))
-    raw = backend._pairs(query)
+    raw = backend._pairs(query) if query.n else PairRaw.empty(0)
     size, magnitude = _scales(sa, sb)
     rtol = backend.pair_rtol(sa.kind, sb.kind)
     tolerance = rtol * (size + magnitude)

@@ -86,7 +86,11 @@ pose is its body's position and orientation.  Margins are set to 0.
   triangle meshes, as pybullet pairs two static meshes: ``NO_RESULT``.
 * In overlap pybullet reports the negative depth, with a point of each
   surface: distance 0 and ``CONTACT``.
-* Answers are GJK's, documented to the same ``1e-5`` relative tolerance.
+* Answers are GJK's, documented to the same ``1e-5`` relative tolerance,
+  but between a triangle mesh and a convex hull (two triangles, two
+  meshes): ``1e-3``.  On 1200 random triangle pairs errors were ``7e-6`` of
+  the pair's size at the median and ``6e-5`` at the 99th percentile, and
+  pairs up to ``8e-4`` of the size apart were reported touching.
 """
 
 import dataclasses
@@ -106,6 +110,13 @@ ORIGIN = [0.0, 0.0, 0.0]
 
 #: Kinds of pair side pybullet is given as a triangle mesh.
 CONCAVE_KINDS = ("triangle", "mesh")
+
+#: Relative accuracy of a triangle mesh against a convex hull (two triangles,
+#: two meshes): on 1200 random triangle pairs, distances were off by 7e-6 of
+#: the pair's size at the median and 6e-5 at the 99th percentile, witness
+#: points as far off their triangles; pairs within 1e-3 of the size of each
+#: other could be reported touching (3 of them, 6e-4 to 8e-4 apart).
+HULL_RTOL = 1e-3
 
 #: ``getClosestPoints``' distance threshold for pairs, in the scaled frame
 #: where both shapes lie in a box of size below 1.
@@ -180,6 +191,12 @@ class PybulletBackend(Backend):
     pair_hull = "GEOM_MESH(vertices alone: their convex hull)"
     pair_probe = "getClosestPoints(body a, body b), the nearest of the points reported"
     pair_frame = "per call: origin at the center of both shapes' boxes, scaled by a power of two"
+
+    def pair_rtol(self, kind_a, kind_b):
+        """``1e-5``; ``1e-3`` between two triangles or meshes (b given as its convex hull)."""
+        if kind_a in CONCAVE_KINDS and kind_b in CONCAVE_KINDS:
+            return HULL_RTOL
+        return self.rtol
 
     def __init__(self, *, hull=True):
         self.hull = bool(hull)

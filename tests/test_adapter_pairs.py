@@ -73,6 +73,7 @@ CASES = [
     ("trimesh", "triangle", "triangle"),
     ("pybullet", "segment", "segment"),
     ("pybullet", "segment", "triangle"),
+    ("pybullet", "triangle", "triangle"),
 ]
 
 
@@ -114,6 +115,9 @@ def test_batches_broadcast_like_proximity(backends):
     assert np.ndim(one.distance) == 0 and one.failure == Failure.OK
     assert one.distance == r.distance[2, 1]
     assert backends["fcl"].distance(a, b).shape == (3, 4)
+    for name in ("fcl", "pybullet"):
+        empty = backends[name].closest_points(Segment(np.zeros((0, 2, 3))), Triangle(b.vertices[:1]))
+        assert empty.distance.shape == (0,) and empty.point_a.shape == (0, 3) and empty.failure.shape == (0,)
 
 
 @pytest.mark.parametrize("name", ["fcl", "pybullet"])
@@ -317,7 +321,7 @@ def test_bad_input_names_the_arguments(backends):
     with pytest.raises(NotImplementedError, match=r"\(a\).*\(b\)"):
         fcl.closest_points(disk, tri)
     with pytest.raises(NotImplementedError, match=r"a is a rounded Triangle"):
-        fcl.closest_points(tri.inflated(0.1), seg[:1] if hasattr(seg, "__getitem__") else tri)
+        fcl.closest_points(tri.inflated(0.1), tri)
     with pytest.raises(NotImplementedError, match=r"capsule \(a\) and a triangle \(b\)"):
         backends["trimesh"].closest_points(Capsule([[0, 0, 0], [1, 0, 0]], 0.1), tri)
     with pytest.raises(ValueError, match="3D"):
