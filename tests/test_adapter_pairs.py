@@ -160,6 +160,29 @@ def test_posed_meshes_are_given_their_pose_and_answer_as_proximity(backends):
         backends["trimesh"].closest_points(Segment([[0, 0, 0], [1, 0, 0]]), b)
 
 
+@pytest.mark.parametrize("name", ["fcl", "trimesh", "pybullet"])
+def test_posed_primitives_answer_as_proximity(backends, name):
+    rng = np.random.default_rng(7)
+    t1, t2 = pose(rng, [0.3, -0.2, 0.5]), pose(rng, [2.0, 0.4, -0.1])
+    tri = Triangle(rng.normal(size=(10, 3, 3))).transformed(t2)
+    cases = [(Triangle(rng.normal(size=(10, 3, 3))), tri)]
+    if name != "trimesh":
+        cases += [
+            (Capsule(rng.normal(size=(10, 2, 3)), 0.2).transformed(t1), tri),
+            (Segment(rng.normal(size=(10, 2, 3))).transformed(t1).inflated(0.1), tri),
+            (Sphere(rng.normal(size=(10, 3)), 0.3).transformed(t1), Segment(rng.normal(size=(10, 2, 3)))),
+        ]
+    for a, b in cases:
+        r = backends[name].closest_points(a, b)
+        assert np.isin(r.failure, [Failure.OK, Failure.CONTACT]).all(), [Failure(f).name for f in r.failure]
+        assert (r.failure == Failure.OK).sum() >= 8
+        ref = proximity.distance(a, b, method="certified")
+        np.testing.assert_array_less(np.abs(r.distance - ref), r.tolerance)
+        ok = r.failure == Failure.OK
+        np.testing.assert_array_less(np.abs(np.linalg.norm(r.point_b - r.point_a, axis=-1) - r.distance)[ok],
+                                     r.tolerance[ok])  # fmt: skip
+
+
 def test_fcl_library_returns_stale_points_or_minus_one_in_contact():
     def tri(v):
         model = fcl_lib.BVHModel()
