@@ -233,7 +233,8 @@ def _scales(a, b):
 
 
 def _translate(raw, a, b, tolerance, reference, out_shape):
-    """Translate the library's answers in place; returns ``(distance, point_a, point_b, failure)``."""
+    """The library's answers translated (see the module docstring): new arrays
+    ``(distance, point_a, point_b, failure)``, flat."""
     distance = raw.distance.copy()
     pa, pb = raw.point_a.copy(), raw.point_b.copy()
     failure = raw.failure.copy()
@@ -363,7 +364,8 @@ def local_frame(direction):
 
 
 def segment_frames(vertices):
-    """Per segment ``(n, 2, 3)``: ``(rotation with z along it, midpoint, length)``.
+    """Of segments ``(n, 2, 3)``: rotations ``(n, 3, 3)`` taking z along each, midpoints
+    ``(n, 3)`` and lengths ``(n,)``.
 
     A segment of length 0 is a point: any axis will do.
     """

@@ -312,6 +312,18 @@ def test_pybullet_library_pairs_no_triangle_meshes_together():
         p.disconnect(physicsClientId=client)
 
 
+def test_poses_reach_pybullet_as_the_quaternions_of_their_rotations():
+    from proximity.adapters._pairs import quaternion
+
+    rng = np.random.default_rng(8)
+    turns = [pose(rng, [0, 0, 0])[:3, :3] for _ in range(50)]
+    # half turns about each axis, and the identity: every branch of the conversion
+    turns += [np.diag(d) for d in ([1.0, -1, -1], [-1.0, 1, -1], [-1.0, -1, 1], [1.0, 1, 1])]
+    for rotation in turns:
+        back = np.reshape(pybullet_lib.getMatrixFromQuaternion(quaternion(rotation).tolist()), (3, 3))
+        np.testing.assert_allclose(back, rotation, rtol=0, atol=1e-15)
+
+
 def test_pybullet_mesh_pairs_are_the_hull_of_b_or_nothing(backends):
     ring = TriangleMesh(*torus(16, 8))
     ball = TriangleMesh(*icosphere(1, 0.2))
