@@ -27,14 +27,18 @@ Witness points
     ``CONVEX_HULL`` where the library was given that side's convex hull),
     and the two must be the reported distance apart, else ``INCONSISTENT``.
 
-Tolerance of a row: ``rtol * (S + M)``, with ``S`` the pair's size (the
+Tolerance of a row: ``rtol * (S + L)``, with ``S`` the pair's size (the
 largest coordinate difference between the vertices of both shapes, in the
-world, plus both radii; a mesh counts by its bounding box) and ``M`` the
-largest coordinate magnitude among them; ``rtol`` is the backend's for the
-pair of kinds (:meth:`Backend.pair_rtol`).
+world, plus both radii; a mesh counts by its bounding box), ``L`` the
+largest coordinate magnitude the library worked with, and ``rtol`` the
+backend's for the pair of kinds (:meth:`Backend.pair_rtol`).  Backends that
+ask their library in a frame of the pair's own (:func:`scaled`: centered
+on it and scaled by a power of two) have ``L`` about ``S`` and add
+``8 eps M`` for the moves into the frame and back, ``M`` the largest
+coordinate magnitude in the world; the others have ``L = M``.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -45,7 +49,7 @@ from proximity.posed import Posed
 from proximity.results import PairResult
 from proximity.shapes import Point, Segment, Triangle
 
-from ._base import Failure, Model, best_method, norm
+from ._base import EPS, Failure, Model, best_method, norm, pow2_scale
 
 #: Kind of each core type, and of its rounded form.
 _KINDS = {Point: ("point", "sphere"), Segment: ("segment", "capsule"), Triangle: ("triangle", None)}
@@ -132,7 +136,8 @@ class PairRaw:
     library reports them; ``hull`` the names of the mesh sides the library
     was given as their convex hull; ``models`` the description of a side's
     model where it is not the backend's ``pair_models`` entry; ``margin``
-    the collision margin read back.
+    the collision margin read back; ``origin`` the origin of the frame of
+    :func:`scaled` where the library was asked in it (set by :func:`unscaled`).
     """
 
     distance: np.ndarray
@@ -143,6 +148,7 @@ class PairRaw:
     face_b: object = None
     hull: tuple = ()
     models: dict = field(default_factory=dict)
+    origin: object = None
     margin: float = float("nan")
 
     @classmethod
@@ -221,15 +227,35 @@ def _on_shape(s, points, out_shape):
     return np.broadcast_to(d, out_shape).reshape(-1)
 
 
-def _scales(a, b):
-    """Per row: the pair's size ``S`` (both radii included) and coordinate magnitude ``M``."""
+def _scales(a, b, origin=None):
+    """Per row: the pair's size ``S`` (both radii included), and the largest coordinate
+    magnitude ``L`` the library worked with (in the caller's unit): of the world
+    coordinates, or where the library was given the frame of :func:`scaled` at ``origin``,
+    of the coordinates relative to it (a posed side's: its own vertices', plus its
+    translation's)."""
     low_a, high_a = a.extent()
     low_b, high_b = b.extent()
     low = np.minimum(low_a[a.index], low_b[b.index])
     high = np.maximum(high_a[a.index], high_b[b.index])
     size = np.max(high - low, axis=1) + a.radius[a.index] + b.radius[b.index]
-    magnitude = np.maximum(np.max(np.abs(low), axis=1), np.max(np.abs(high), axis=1))
+    if origin is None:
+        return size, np.maximum(np.max(np.abs(low), axis=1), np.max(np.abs(high), axis=1))
+    magnitude = np.zeros(len(size))
+    for s in (a, b):  # per member of the side (a mesh is one), then per row
+        if s.posed:
+            v = np.abs(s.vertices)
+            member = np.array([v.max(initial=0.0)]) if s.kind == "mesh" else v.max(axis=(1, 2), initial=0.0)
+            member = member + np.max(np.abs(s.translation - origin))
+        else:
+            lo, hi = s.extent()
+            member = np.maximum(np.abs(lo - origin), np.abs(hi - origin)).max(axis=1)
+        magnitude = np.maximum(magnitude, member[s.index])
     return size, magnitude
+
+
+def _world_magnitude(a, b):
+    """Per row: the largest coordinate magnitude of the pair's vertices in the world."""
+    return _scales(a, b)[1]
 
 
 def _translate(raw, a, b, tolerance, reference, out_shape):
@@ -303,9 +329,13 @@ def closest_points(backend, a, b):
         )
     query = PairQuery(sa, sb, int(reference.size))
     raw = backend._pairs(query) if query.n else PairRaw.empty(0)
-    size, magnitude = _scales(sa, sb)
+    size, magnitude = _scales(sa, sb, raw.origin)
     rtol = backend.pair_rtol(sa.kind, sb.kind)
     tolerance = rtol * (size + magnitude)
+    if raw.origin is not None:
+        # Moving the pair into the library's frame and its answer back rounds each
+        # coordinate once or twice, by eps of the world's magnitude.
+        tolerance += 8 * EPS * _world_magnitude(sa, sb)
     distance, pa, pb, failure = _translate(raw, sa, sb, tolerance, reference.reshape(-1), out_shape)
 
     values, unknown = {}, ["feature_a", "feature_b"]
@@ -346,6 +376,44 @@ def closest_points(backend, a, b):
         model=model,
         unknown=tuple(unknown),
         backend=backend.name,
+    )
+
+
+def scaled(query):
+    """``(query, origin, factor)``: the pair in one frame for all its rows, where the
+    libraries' absolute tolerances act relative to the pair.
+
+    The frame's origin is the center of both sides' boxes, and ``factor`` the power of two
+    that brings their extent (and radii) into ``[0.5, 1)``.  An unposed side's vertices
+    become ``(V - origin) factor``; a posed side's are only scaled (exactly), its pose
+    keeps its rotation and its translation becomes ``(t - origin) factor``.
+    """
+    a, b = query.a, query.b
+    lows, highs = zip(*(s.extent() for s in (a, b)), strict=True)
+    low = np.min([x.min(axis=0) for x in lows], axis=0)
+    high = np.max([x.max(axis=0) for x in highs], axis=0)
+    origin = low * 0.5 + high * 0.5
+    radius = max(float(a.radius.max(initial=0.0)), float(b.radius.max(initial=0.0)))
+    factor = float(pow2_scale(max(float(np.max(high - low)), radius)))
+
+    def move(s):
+        if not s.posed:  # moved with its vertices, so that the library sees small coordinates
+            return replace(s, vertices=(s.vertices - origin) * factor, radius=s.radius * factor)
+        translation = (s.translation - origin) * factor
+        return replace(s, vertices=s.vertices * factor, radius=s.radius * factor, translation=translation)
+
+    return PairQuery(move(a), move(b), query.n), origin, factor
+
+
+def unscaled(raw, origin, factor):
+    """``raw``, answered in the frame of :func:`scaled`, in the caller's coordinates."""
+    return replace(
+        raw,
+        distance=raw.distance / factor,
+        point_a=raw.point_a / factor + origin,
+        point_b=raw.point_b / factor + origin,
+        margin=raw.margin / factor,
+        origin=origin,
     )
 
 

@@ -14,6 +14,7 @@ import pytest
 import proximity
 from proximity import Capsule, Disk, Segment, Sphere, Triangle, TriangleMesh, adapters
 from proximity.adapters import Failure
+from proximity.adapters._pairs import segment_frames
 from proximity.testing import exact
 from proximity.testing.meshes import icosphere, torus
 
@@ -181,6 +182,31 @@ def test_posed_primitives_answer_as_proximity(backends, name):
         ok = r.failure == Failure.OK
         np.testing.assert_array_less(np.abs(np.linalg.norm(r.point_b - r.point_a, axis=-1) - r.distance)[ok],
                                      r.tolerance[ok])  # fmt: skip
+
+
+def test_fcl_library_has_absolute_tolerances_which_the_backends_frame_removes(backends):
+    rng = np.random.default_rng(9)
+    a, b, va, vb = pairs(rng, "segment", "triangle", 40)
+    a, b = Segment(va * 1e-4), Triangle(vb * 1e-4)
+    ref = proximity.distance(a, b, method="certified")
+    request = fcl_lib.DistanceRequest(enable_nearest_points=True)
+    errors = []
+    frames, middles, lengths = segment_frames(a.vertices)  # z along each segment
+    for tri, frame, middle, length, d in zip(b.vertices, frames, middles, lengths, ref, strict=True):
+        model = fcl_lib.BVHModel()
+        model.beginModel(3, 1)
+        model.addSubModel(tri, np.array([[0, 1, 2]]))
+        model.endModel()
+        capsule = fcl_lib.Capsule(0.0, float(length))
+        placed = fcl_lib.CollisionObject(capsule, fcl_lib.Transform(frame, middle))
+        result = fcl_lib.DistanceResult()
+        got = fcl_lib.distance(fcl_lib.CollisionObject(model, fcl_lib.Transform()), placed, request, result)
+        errors.append(abs(max(got, 0.0) - d) / 3e-4)
+    assert max(errors) > 1e-3  # in the caller's coordinates: wrong by more than 0.1% of the size
+    r = backends["fcl"].closest_points(a, b)
+    assert np.isin(r.failure, [Failure.OK, Failure.CONTACT]).all()
+    np.testing.assert_array_less(np.abs(r.distance - ref), r.tolerance)
+    assert r.tolerance.max() < 1e-16  # 64 eps of a pair of size about 3e-4
 
 
 def test_fcl_library_returns_stale_points_or_minus_one_in_contact():
