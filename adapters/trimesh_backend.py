@@ -62,11 +62,11 @@ it (and a segment as the degenerate triangle ``(A, B, B)`` would be
 trimesh asks fcl for signed distances: overlapping shapes come back
 negative (not in general the depth) with points that are not a point of
 contact: distance 0 and ``CONTACT``.  Signed distances are less accurate
-than fcl's own: on a torus against a translated icosphere, distances were
-off by up to ``3e-9`` of the pair's size, and on random triangle pairs, one
-of them rotated, by up to ``2.1e-8`` (with the witness point on the rotated
-side as far off it), so the documented relative tolerance of pairs is
-``1e-6`` (unrotated triangle pairs were within ``64 eps``).  Its
+than fcl's own: on a torus against 20 posed icospheres, distances were off
+by up to ``1.1e-8`` of the pair's size, and on 400 random triangle pairs,
+one of them rotated, by up to ``1.8e-8``, so the documented relative
+tolerance of pairs is ``1e-6`` (unrotated triangle pairs were within
+``64 eps``).  Its
 ``DistanceData`` names the face of the first object of fcl's broad phase
 only, either side: no face is reported.
 """
@@ -77,12 +77,10 @@ from ._base import Backend, Failure, Raw, import_library, norm, plane_frame, pow
 from ._pairs import PairRaw, scaled, unscaled
 
 #: Relative accuracy of ``min_distance_other``, which asks fcl for signed
-#: distances: on a torus against a translated icosphere, distances were off by
-#: up to 3e-9 of the pair's size and witness points up to 3e-9 off the mesh;
-#: on 200 random triangle pairs, one of them rotated, distances were off by up
-#: to 2.1e-8 of the pair's size (3.5e-9 at the median), witness points on the
-#: rotated side up to 2.4e-8 off it.  Without a rotation, triangle pairs were
-#: within 64 eps.
+#: distances: in the pair's frame, distances were off by up to 1.1e-8 of the
+#: pair's size on a torus against 20 posed icospheres, and 1.8e-8 on 400
+#: random triangle pairs, one of them rotated (unrotated triangle pairs were
+#: within 64 eps).
 PAIR_RTOL = 1e-6
 
 #: Triangles built and sent to trimesh at once, to bound memory for large K.
