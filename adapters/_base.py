@@ -556,6 +556,11 @@ class Backend:
             per row, and the :class:`Model`.  Contact is distance 0 (with
             ``CONTACT`` where the library gives no common point), as
             :func:`proximity.distance` gives it: no library's depth is kept.
+            The tolerance is ``rtol (S + L) + 8 eps M``: ``S`` the pair's
+            size (the largest coordinate difference between the vertices of
+            both shapes, plus both radii), ``L`` the coordinate magnitude in
+            the library's frame (a frame of the pair's own, about ``S``) and
+            ``M`` in the world, ``rtol`` the backend's :meth:`pair_rtol`.
 
         Raises
         ------

@@ -78,12 +78,13 @@ is a ``GEOM_MESH`` given its indices and a mesh a
 pose is its body's position and orientation.  Margins are set to 0.
 
 * pybullet pairs a triangle mesh with convex shapes only: two of them give
-  no points at all.  Where both sides are triangles or meshes, b is given
-  as the convex hull of its vertices (its model of a mesh on a body that
-  moves; a triangle's hull is the triangle), and the answer is to that
-  hull: a witness off the mesh, or contact where the meshes are apart,
-  becomes ``CONVEX_HULL``.  ``PybulletBackend(hull=False)`` gives both as
-  triangle meshes, as pybullet pairs two static meshes: ``NO_RESULT``.
+  no points at all.  Where both sides are triangles or meshes, one is given
+  as the convex hull of its vertices (pybullet's model of a mesh on a body
+  that moves): a triangle against a mesh (a triangle's hull is the
+  triangle), else b.  The answer is to that hull: a witness off the mesh,
+  or contact where the meshes are apart, becomes ``CONVEX_HULL``.
+  ``PybulletBackend(hull=False)`` gives both as triangle meshes, as
+  pybullet pairs two static meshes: ``NO_RESULT``.
 * In overlap pybullet reports the negative depth, with a point of each
   surface: distance 0 and ``CONTACT``.
 * Answers are GJK's, documented to the same ``1e-5`` relative tolerance,
@@ -152,9 +153,10 @@ class PybulletBackend(Backend):
     Parameters
     ----------
     hull : bool, optional
-        In a pair query between two triangles or meshes, give b as the
-        convex hull of its vertices (default True), without which pybullet
-        gives no answer; see the module docstring.
+        In a pair query between two triangles or meshes, give one of them
+        (a triangle against a mesh, else b) as the convex hull of its
+        vertices (default True), without which pybullet gives no answer;
+        see the module docstring.
 
     Examples
     --------
@@ -376,18 +378,21 @@ class PybulletBackend(Backend):
         a, b = query.a, query.b
         # pybullet pairs a concave triangle mesh (a triangle or mesh given with its
         # indices) with convex shapes only: where both sides are triangles or meshes,
-        # b is given as the convex hull of its vertices (a triangle's is itself).
-        hull = self.hull and a.kind in CONCAVE_KINDS and b.kind in CONCAVE_KINDS
+        # one is given as the convex hull of its vertices: a triangle (whose hull is
+        # itself) against a mesh, else b.
+        hull = None
+        if self.hull and a.kind in CONCAVE_KINDS and b.kind in CONCAVE_KINDS:
+            hull = a if (a.kind, b.kind) == ("triangle", "mesh") else b
         raw = PairRaw.empty(
             query.n,
-            hull=("b",) if hull and b.kind == "mesh" else (),
-            models={"b": self.pair_hull} if hull else {},
+            hull=(hull.name,) if hull is not None and hull.kind == "mesh" else (),
+            models={hull.name: self.pair_hull} if hull is not None else {},
         )
         self._fresh_world()
         made, margins, more = [], [], []
         try:
-            bodies_a, added_a, margins = self._pair_bodies(a, False, made)
-            bodies_b, added_b, more = self._pair_bodies(b, hull, made)
+            bodies_a, added_a, margins = self._pair_bodies(a, hull is a, made)
+            bodies_b, added_b, more = self._pair_bodies(b, hull is b, made)
             for i in range(query.n):
                 ka, kb = a.index[i], b.index[i]
                 contacts = self._call("getClosestPoints", bodies_a[ka], bodies_b[kb], PAIR_REACH)

@@ -370,6 +370,11 @@ def test_pybullet_mesh_pairs_are_the_hull_of_b_or_nothing(backends):
     r = backends["pybullet"].closest_points(flat, flat.transformed(above.transform))
     assert r.failure == Failure.OK and abs(float(r.distance) - 2.0) <= float(r.tolerance)
     assert r.model.primitive == "a: GEOM_MESH(1 triangle); b: GEOM_MESH(vertices alone: their convex hull)"
+    # a triangle in the ring's hole: the triangle is the hull, and the ring stays a ring
+    hole = Triangle([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.0, 0.1, 0.0]])
+    r = backends["pybullet"].closest_points(hole, ring)
+    assert r.failure == Failure.OK and r.model.primitive.startswith("a: GEOM_MESH(vertices alone")
+    assert abs(float(r.distance) - float(proximity.distance(hole, ring))) <= float(r.tolerance)
 
 
 def test_bad_input_names_the_arguments(backends):
