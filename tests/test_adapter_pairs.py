@@ -409,6 +409,18 @@ def test_cross_check_of_pairs_counts_contact_and_stays_within_tolerance():
     assert report.table().startswith("Segment of batch shape (12,) and Triangle")
 
 
+def test_trimesh_on_the_callers_coordinates_is_wrong_on_small_pairs_and_cross_check_sees_it():
+    rng = np.random.default_rng(10)
+    _, _, va, vb = pairs(rng, "triangle", "triangle", 40)
+    a, b = Triangle(va * 1e-4), Triangle(vb * 1e-4)
+    with adapters.get("trimesh", rescale=False) as raw:
+        report = adapters.cross_check(a, b, backends=["trimesh", raw])
+        assert raw.closest_points(a, b).model.frame.startswith("the world")
+    assert report.summary("trimesh").beyond_tolerance == 0
+    s = report.summary("trimesh[raw]")
+    assert s.beyond_tolerance > 0 and s.max_relative > 1e-4
+
+
 @pytest.mark.parametrize("module", ["proximity.adapters._base", "proximity.adapters.crosscheck"])
 def test_pair_docstring_examples_run(module):
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.NORMALIZE_WHITESPACE)
