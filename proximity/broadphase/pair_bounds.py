@@ -59,8 +59,9 @@ from .._jit import inline, kernel
 _VERTICES = primitives.vertex_counts()
 
 #: Columns of a node's frame: the parallelepiped's centre and half-widths,
-#: and whether it stands for the oriented box (1) or the box (0).
-FRAME_COLUMNS = 7
+#: whether it stands for the oriented box (1) or the box (0), and its own
+#: half-widths along its axes (:func:`frame`; turning the axes keeps them).
+FRAME_COLUMNS = 10
 
 _cache = weakref.WeakKeyDictionary()
 
@@ -108,10 +109,21 @@ def _fill(kinds, params, bounds, child, count, vertices, frames, rep):
         if ok0 and ok1 and ok2:
             frames[n, 0], frames[n, 1], frames[n, 2] = x0 + x1 + x2, y0 + y1 + y2, z0 + z1 + z2
             frames[n, 3], frames[n, 4], frames[n, 5], frames[n, 6] = h0, h1, h2, 1.0
+            a0 = (bounds[n, 6], bounds[n, 7], bounds[n, 8])
+            a1 = (bounds[n, 11], bounds[n, 12], bounds[n, 13])
+            a2 = (bounds[n, 16], bounds[n, 17], bounds[n, 18])
+            # The projection of the parallelepiped on each of its axes (Gram terms), widened
+            # by 2^-30 so that the rounding of posed axes' dot products stays within it.
+            g01, g02, g12 = abs(_dot(a0, a1)), abs(_dot(a0, a2)), abs(_dot(a1, a2))
+            widen = 1.0 + 2.0**-30
+            frames[n, 7] = (_dot(a0, a0) * h0 + g01 * h1 + g02 * h2) * widen
+            frames[n, 8] = (g01 * h0 + _dot(a1, a1) * h1 + g12 * h2) * widen
+            frames[n, 9] = (g02 * h0 + g12 * h1 + _dot(a2, a2) * h2) * widen
         else:
             for a in range(3):
                 frames[n, a] = bounds[n, a] * 0.5 + bounds[n, 3 + a] * 0.5
                 frames[n, 3 + a] = bounds[n, 3 + a] * 0.5 - bounds[n, a] * 0.5
+                frames[n, 7 + a] = frames[n, 3 + a]
             frames[n, 6] = 0.0
     # Children come after their parents: backwards, a node's first child is done.
     for n in range(child.shape[0] - 1, -1, -1):
@@ -212,12 +224,7 @@ def frame(bounds, frames, n, pose, s, is_posed):
         a1 = _turned(pose, a1[0], a1[1], a1[2])
         a2 = _turned(pose, a2[0], a2[1], a2[2])
     c = (c[0] * s, c[1] * s, c[2] * s)
-    # Its own extent along each axis: the projection of the parallelepiped (Gram terms).
-    g01, g02, g12 = abs(_dot(a0, a1)), abs(_dot(a0, a2)), abs(_dot(a1, a2))
-    r0 = _dot(a0, a0) * h[0] + g01 * h[1] + g02 * h[2]
-    r1 = g01 * h[0] + _dot(a1, a1) * h[1] + g12 * h[2]
-    r2 = g02 * h[0] + g12 * h[1] + _dot(a2, a2) * h[2]
-    return c, (a0, a1, a2), h, (r0, r1, r2)
+    return c, (a0, a1, a2), h, (frames[n, 7] * s, frames[n, 8] * s, frames[n, 9] * s)
 
 
 @inline

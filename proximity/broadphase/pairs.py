@@ -64,7 +64,7 @@ from numba.core import types
 
 from .. import certified, pairs, primitives
 from .._fp import EPS, faithful_difference, two_sum
-from .._jit import inline, kernel, specialize
+from .._jit import inline, kernel, part, specialize
 from .bounds import _scale
 from .pair_bounds import (  # noqa: F401  (node_data: for the driver)
     box_gap2,
@@ -255,12 +255,9 @@ def _reach(fs, cutoff, rout, s):
 
 @inline
 def _push(h_lb, h_a, h_b, n, lb, a, b):
-    """Push ``(lb, a, b)`` on the binary min-heap of ``n`` entries (grown where full):
-    returns the heap's arrays and its new size."""
-    if n == h_lb.shape[0]:
-        grown_lb, grown_a, grown_b = np.empty(2 * n), np.empty(2 * n, np.int64), np.empty(2 * n, np.int64)
-        grown_lb[:n], grown_a[:n], grown_b[:n] = h_lb, h_a, h_b
-        h_lb, h_a, h_b = grown_lb, grown_a, grown_b
+    """Push ``(lb, a, b)`` on the binary min-heap of ``n`` entries, which has room for it
+    (:func:`_room`): returns its new size.  Nothing returns the arrays, whose references
+    would be counted on every push."""
     i = n
     while i > 0:
         parent = (i - 1) >> 1
@@ -269,7 +266,15 @@ def _push(h_lb, h_a, h_b, n, lb, a, b):
         h_lb[i], h_a[i], h_b[i] = h_lb[parent], h_a[parent], h_b[parent]
         i = parent
     h_lb[i], h_a[i], h_b[i] = lb, a, b
-    return h_lb, h_a, h_b, n + 1
+    return n + 1
+
+
+@part
+def _room(h_lb, h_a, h_b, n):
+    """The heap's arrays, twice as long, with its ``n`` entries."""
+    grown_lb, grown_a, grown_b = np.empty(2 * n), np.empty(2 * n, np.int64), np.empty(2 * n, np.int64)
+    grown_lb[:n], grown_a[:n], grown_b[:n] = h_lb[:n], h_a[:n], h_b[:n]
+    return grown_lb, grown_a, grown_b
 
 
 @inline
@@ -319,22 +324,36 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
     na, nb = queries.start_a[q], queries.start_b[q]
     lb0 = node_lb2(bounds_a, frames_a, na, bounds_b, frames_b, nb, pose, s, POSED)
     if lb0 <= limit:
-        h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, lb0, na, nb)
+        n_heap = _push(h_lb, h_a, h_b, n_heap, lb0, na, nb)
+    # The nearer child of the pair just split, taken next without the heap where nothing
+    # in the heap is nearer (half the heap's traffic).
+    pending, p_lb, p_a, p_b = False, 0.0, 0, 0
     while True:
-        if n_heap == 0 or h_lb[0] > limit:
-            if n_cand == 0:
-                break
-            # Candidates wait: their answers may prune what is left.
-            _flush(z, n_cand, cand, cand_r, q, A, B, queries, magnitude, fs, ist, win, fin, fin_lo, tb,
-                   POSED, pose)  # fmt: skip
-            n_cand = 0
-            reach = _reach(fs, cutoff, rout, s)
-            limit = reach * reach
-            if ist[5] & 1:
-                break
-            continue
-        na, nb = _pop(h_lb, h_a, h_b, n_heap)
-        n_heap -= 1
+        if pending and p_lb <= limit and (n_heap == 0 or p_lb <= h_lb[0]):
+            pending = False
+            na, nb = p_a, p_b
+        else:
+            if pending:
+                pending = False
+                if p_lb <= limit:
+                    if n_heap == h_lb.shape[0]:
+                        h_lb, h_a, h_b = _room(h_lb, h_a, h_b, n_heap)
+                    n_heap = _push(h_lb, h_a, h_b, n_heap, p_lb, p_a, p_b)
+                continue
+            if n_heap == 0 or h_lb[0] > limit:
+                if n_cand == 0:
+                    break
+                # Candidates wait: their answers may prune what is left.
+                _flush(z, n_cand, cand, cand_r, q, A, B, queries, magnitude, fs, ist, win, fin, fin_lo, tb,
+                       POSED, pose)  # fmt: skip
+                n_cand = 0
+                reach = _reach(fs, cutoff, rout, s)
+                limit = reach * reach
+                if ist[5] & 1:
+                    break
+                continue
+            na, nb = _pop(h_lb, h_a, h_b, n_heap)
+            n_heap -= 1
         leaf_a, leaf_b = count_a[na] > 0, count_b[nb] > 0
         if leaf_a and leaf_b:
             for kb in range(child_b[nb], child_b[nb] + count_b[nb]):
@@ -422,10 +441,14 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
                     fs[4] = u
                     reach = _reach(fs, cutoff, rout, s)
                     limit = reach * reach
+            if d2 < d1:
+                d1, c1, o1, d2, c2, o2 = d2, c2, o2, d1, c1, o1
             if d1 <= limit:
-                h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, d1, c1, o1)
+                pending, p_lb, p_a, p_b = True, d1, c1, o1
             if d2 <= limit:
-                h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, d2, c2, o2)
+                if n_heap == h_lb.shape[0]:
+                    h_lb, h_a, h_b = _room(h_lb, h_a, h_b, n_heap)
+                n_heap = _push(h_lb, h_a, h_b, n_heap, d2, c2, o2)
         if ist[5] & 1:
             break
     undecided = math.nan
