@@ -532,11 +532,10 @@ class _MeshPair:
         self.descend = bp.descent_kernel(method, present, posed, -1, -1)  # faces have no radii
         zero, none = np.zeros(1, np.int64), np.empty(0)
         self.queries = bp.Queries(zero, zero, np.zeros(1), np.zeros(1), np.full(1, np.inf))
-        self.unused = dict(sqr_distance=none, point_a=np.empty((0, 3)), point_b=np.empty((0, 3)),
-                           feature_a=np.empty(0, np.int8), feature_b=np.empty(0, np.int8),
-                           extra_a=np.empty((0, 3)), extra_b=np.empty((0, 3)), index_a=np.empty(0, np.int64),
-                           index_b=np.empty(0, np.int64), row_a=np.empty(0, np.int64),
-                           row_b=np.empty(0, np.int64), radius_a=none, radius_b=none)  # fmt: skip
+        # The outputs a distance does not write, between signed, distance and undecided.
+        self.unused = (none, np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int8), np.empty(0, np.int8),
+                       np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int64), np.empty(0, np.int64),
+                       np.empty(0, np.int64), np.empty(0, np.int64), none, none)  # fmt: skip
         self.outputs, self.magnitude = bp.Outputs, bp.magnitude
         self.unposed = np.zeros((3, 4))
 
@@ -544,16 +543,17 @@ class _MeshPair:
         """The distance, or None where the descent left it undecided."""
         magnitude = float(self.magnitude(self.m_a, self.m_b, pose, 0.0))
         pose_array = self.unposed if pose is None else pose
-        out = self.outputs(signed=np.empty(1), distance=np.empty(1), undecided=np.empty(1), **self.unused)
+        out = self.outputs(np.empty(1), np.empty(1), *self.unused, np.empty(1))
         with _threads.kernel():
             self.descend(0, 1, self.a, self.b, pose_array, self.depth, magnitude, self.queries, out, False)
         if out.undecided[0] == out.undecided[0]:
             return None
-        d = np.maximum(out.signed, 0.0) + 0.0
-        return freeze_result(d.reshape(()))[()]
+        # As the general path's np.maximum(signed, 0.0) + 0.0 (the sum turns -0.0 into 0.0).
+        return np.float64(max(float(out.signed[0]), 0.0) + 0.0)
 
 
-_mesh_pairs = weakref.WeakKeyDictionary()  # tree of a -> {(tree of b, method, posed): _MeshPair}
+_mesh_pairs = weakref.WeakKeyDictionary()  # tree of a -> {tree of b: {(method, posed): _MeshPair}}
+_last = (lambda: None, lambda: None, None, None)  # the last pair asked: (weak a, weak b, key, _MeshPair)
 
 
 def _mesh_pair(a, b, method):
@@ -571,11 +571,19 @@ def _mesh_pair(a, b, method):
         pose[:, :3], pose[:, 3] = rotation, translation
     if type(b) is not TriangleMesh:
         return None
-    prepared = _mesh_pairs.setdefault(a._tree, weakref.WeakKeyDictionary()).setdefault(b._tree, {})
-    key = (method, pose is not None)
+    global _last
+    tree_a, tree_b, key = a._tree, b._tree, (method, pose is not None)
+    ref_a, ref_b, last_key, fast = _last
+    if ref_a() is tree_a and ref_b() is tree_b and last_key == key:
+        return fast, pose
+    prepared = _mesh_pairs.get(tree_a)
+    if prepared is None:
+        prepared = _mesh_pairs[tree_a] = weakref.WeakKeyDictionary()
+    prepared = prepared.setdefault(tree_b, {})
     fast = prepared.get(key)
     if fast is None:
         fast = prepared[key] = _MeshPair(a, b, resolve(method), pose is not None)
+    _last = (weakref.ref(tree_a), weakref.ref(tree_b), key, fast)
     return fast, pose
 
 
