@@ -1,7 +1,8 @@
 """Other libraries' closest-point answers, behind proximity's query interface.
 
 Each backend wraps one library (python-fcl, trimesh, pybullet), builds the
-smallest native model that answers the query, and returns proximity's own
+smallest native model that answers the query (the closest point to a
+point, or the closest points of two shapes), and returns proximity's own
 result types.  Answers that the library gives in its own conventions
 (sentinels, missing results, contact where there is none, nearest points off
 the shape) are translated to NaN with a :class:`Failure` code per row, so
@@ -94,13 +95,15 @@ def get(name, **options):
     ----------
     name : {"fcl", "trimesh", "pybullet"}
     **options
-        Passed to the backend's constructor (``rescale`` for trimesh).
+        Passed to the backend's constructor (``rescale`` for trimesh,
+        ``hull`` for pybullet).
 
     Returns
     -------
     Backend
-        With ``closest_point(shape, points, *, tol=None)`` and
-        ``distance(shape, points, *, tol=None)``.  Close it (or use it as a
+        With ``closest_point(shape, points, *, tol=None)``,
+        ``closest_points(a, b)`` and ``distance(shape, points, *, tol=None)``
+        (or ``distance(a, b)``).  Close it (or use it as a
         context manager) to release what the library holds; pybullet
         backends own a physics client.
 

@@ -47,7 +47,8 @@ class Failure(enum.IntEnum):
     """Why a backend row has no answer.
 
     Failure arrays hold these codes as ``int8``.  Every row whose code is not
-    ``OK`` has NaN in all float fields of the result and ``Feature.NONE``.
+    ``OK`` has NaN in all float fields of the result and ``Feature.NONE``,
+    but for ``CONTACT`` rows of a pair query, whose distance is 0.
 
     Examples
     --------
@@ -82,6 +83,16 @@ class Failure(enum.IntEnum):
     INCONSISTENT = 6
     #: The library raised an error while building the model or answering.
     EXCEPTION = 7
+    #: Pair queries: the library reported the shapes in contact (a distance
+    #: within the tolerance of 0, or negative), as proximity finds them, but
+    #: its witness points are not a common point of both shapes (fcl's -1 or
+    #: 0 with stale points, trimesh's and pybullet's negative values).  The
+    #: distance is 0; the witness points are NaN.
+    CONTACT = 8
+    #: Pair queries: the library was given a mesh's convex hull (pybullet's
+    #: model of a mesh on a body that can move) and its answer is the hull's:
+    #: a witness point off the mesh, or contact where the shapes are apart.
+    CONVEX_HULL = 9
 
 
 @dataclass(frozen=True)
@@ -95,10 +106,12 @@ class Model:
     primitive : str
         The native model of one shape, e.g. ``"Cylinder(R, 0)"``.
     probe : str
-        How the query point was given to the library.
+        How the query point was given to the library; for a pair query,
+        how the pair was asked.
     segments : ndarray of int64, shape ``batch``
         Number of segments ``K`` of each tessellated shape; 0 where the
-        library was given an exact primitive.
+        library was given an exact primitive (always, for a pair query,
+        whose arrays have the broadcast shape of the pair).
     bound : ndarray of float64, shape ``batch``
         Hausdorff distance between each shape and its model: the sagitta
         ``R (1 - cos(pi / K))`` of a tessellated circle or disk, 0 otherwise.
@@ -156,7 +169,7 @@ class BackendResult:
 
     Attributes
     ----------
-    result : TriangleResult, DiskResult or CircleResult
+    result : TriangleResult, DiskResult, CircleResult, MeshResult or PairResult
         The same type proximity returns, of the broadcast shape.  Rows whose
         failure is not ``OK`` are NaN; fields listed in :attr:`unknown` are
         not given by the library: ``Feature.NONE`` for ``feature``, NaN for
@@ -491,16 +504,89 @@ class Backend:
         return library_version(self.distribution)
 
     def distance(self, shape, points, *, tol=None):
-        """Distances from ``points`` to ``shape`` as the library gives them, NaN where it fails.
+        """Distances from ``points`` to ``shape``, or between two shapes, as the library gives them.
 
-        Parameters and broadcasting are those of :meth:`closest_point`.
+        Parameters and broadcasting are those of :meth:`closest_point`; where
+        ``points`` is a shape too, those of :meth:`closest_points` (``tol``
+        is then not used), as :func:`proximity.distance` does.
 
         Returns
         -------
         ndarray of float64, shape ``batch``
-            A NumPy scalar for one point against one shape.
+            NaN where the row failed (0 for ``CONTACT``); a NumPy scalar for
+            one point against one shape, or one pair.
         """
+        if isinstance(points, proximity.Shape):
+            return self.closest_points(shape, points).result.distance
         return self.closest_point(shape, points, tol=tol).result.distance
+
+    #: Native model of each kind of side of a pair query, for :class:`Model`;
+    #: the kinds the backend answers pairs of.
+    pair_models = {}
+    #: How a pair is given to the library.
+    pair_probe = ""
+    #: Coordinates the library works in for pairs.
+    pair_frame = "the world, each shape at its pose"
+
+    def pair_rtol(self, kind_a, kind_b):
+        """Relative accuracy documented for the library on a pair of kinds; :attr:`rtol` by default."""
+        return self.rtol
+
+    def closest_points(self, a, b):
+        """Ask the library for the closest points of two shapes.
+
+        Parameters
+        ----------
+        a, b : Shape
+            Each a point, segment or triangle batch, a :class:`proximity.Sphere`
+            or :class:`proximity.Capsule` batch (points and segments inflated),
+            or a :class:`proximity.TriangleMesh`; any of them posed
+            (``shape.transformed(T)``: the pose is given to the library as
+            the object's transform where it takes one).  Batches broadcast
+            as in :func:`proximity.closest_points`.  Which kinds a backend
+            takes is in its ``pair_models``.
+
+        Returns
+        -------
+        BackendResult
+            A :class:`proximity.PairResult` in ``.result`` (distance,
+            witness points ``point_a`` and ``point_b``; ``face_a`` and
+            ``face_b`` where the library reports them, the other fields
+            listed in ``unknown``), a :class:`Failure` code and a tolerance
+            per row, and the :class:`Model`.  Contact is distance 0 (with
+            ``CONTACT`` where the library gives no common point), as
+            :func:`proximity.distance` gives it: no library's depth is kept.
+            The tolerance is ``rtol (S + L) + 8 eps M``: ``S`` the pair's
+            size (the largest coordinate difference between the vertices of
+            both shapes, plus both radii), ``L`` the coordinate magnitude in
+            the library's frame (a frame of the pair's own, about ``S``) and
+            ``M`` in the world, ``rtol`` the backend's :meth:`pair_rtol`.
+
+        Raises
+        ------
+        ValueError
+            Where proximity refuses the pair (different dimensions, batches
+            that do not broadcast), naming both arguments; for 2D shapes.
+        NotImplementedError
+            For a kind of shape, or a pair of kinds, the backend cannot
+            give its library, naming the argument or both.
+
+        Examples
+        --------
+        >>> import proximity, proximity.adapters as adapters
+        >>> a = proximity.Capsule([[0, 0, -1], [0, 0, 1]], radius=0.5)
+        >>> b = proximity.Capsule([[3, -1, 0], [3, 1, 0]], radius=0.5)
+        >>> with adapters.get("fcl") as fcl:
+        ...     r = fcl.closest_points(a, b)
+        >>> float(r.distance), r.point_a.tolist(), r.point_b.tolist(), r.failure.name
+        (2.0, [0.5, 0.0, 0.0], [2.5, 0.0, 0.0], 'OK')
+        """
+        from ._pairs import closest_points
+
+        return closest_points(self, a, b)
+
+    def _pairs(self, query):
+        raise NotImplementedError
 
     def closest_point(self, shape, points, *, tol=None):
         """Ask the library for the closest point on ``shape`` to each of ``points``.

@@ -10,7 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import proximity
+
 from ._base import Backend, Failure, Model, best_method, error_scale
+from ._pairs import pair_scale
 
 
 @dataclass(frozen=True)
@@ -26,13 +29,15 @@ class Summary:
     rows : int
         Number of query rows (the size of the broadcast shape).
     answered : int
-        Rows whose failure code is ``OK``.
+        Rows whose failure code is ``OK``, or ``CONTACT`` (a pair in
+        contact: distance 0 without witness points).
     failures : mapping of str to int
         Count of each other :class:`~proximity.adapters.Failure` reason that occurred.
     max_disagreement, median_disagreement : float
         Of ``|d - d_ref|`` over the answered rows (NaN if none).
     max_relative, median_relative : float
-        Of ``|d - d_ref| / S`` with proximity's error scale ``S``.
+        Of ``|d - d_ref| / S`` with proximity's error scale ``S`` (for a
+        pair query, the pair's size: see :meth:`Backend.closest_points`).
     beyond_tolerance : int
         Answered rows whose disagreement exceeds the backend's documented
         tolerance for that row.
@@ -78,6 +83,7 @@ class Case:
 
     backend: str
     index: tuple
+    #: The query point; empty for a pair query.
     point: tuple
     reference: float
     distance: float
@@ -177,9 +183,13 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     Parameters
     ----------
     shape : proximity.Triangle, proximity.Disk or proximity.Circle
-        One shape or a batch.
-    points : array_like, shape ``(..., D)``
-        Query points, broadcast against the shape's batch.
+        One shape or a batch; for a pair query, any shape
+        :meth:`Backend.closest_points` takes.
+    points : array_like, shape ``(..., D)``, or Shape
+        Query points, broadcast against the shape's batch; or a second
+        shape: the backends' :meth:`Backend.closest_points` of the pair are
+        compared with :func:`proximity.distance` of the pair, as
+        :func:`proximity.distance` reads its second argument.
     backends : iterable of str or Backend, optional
         Backend names (created here and closed afterwards) or backend
         objects (left open).  Default: every name in :func:`available`.
@@ -207,6 +217,20 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     Circle of batch shape () against proximity certified
     backend  model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
     trimesh  ...    20/20     ...
+
+    A pair query: 50 capsules against 50 triangles, the last 10 of them
+    crossing the capsules' axes.  fcl answers those with witness points
+    that are not a point of contact: distance 0, code ``CONTACT``.
+
+    >>> rng = np.random.default_rng(1)
+    >>> axes = rng.normal(size=(50, 2, 3))
+    >>> tri = rng.normal(size=(50, 3, 3)) + [4, 0, 0]
+    >>> around = [[2, 0, 0], [-1, 2, 0], [-1, -2, 0]]      # centroid at the origin
+    >>> tri[40:] = axes[40:].mean(axis=1, keepdims=True) + around
+    >>> pair = adapters.cross_check(proximity.Capsule(axes, 0.25), proximity.Triangle(tri), backends=["fcl"])
+    >>> s = pair.summary("fcl")
+    >>> s.rows, s.answered, s.beyond_tolerance, s.failures["CONTACT"]
+    (50, 50, 0, 10)
     """
     from . import available, get
 
@@ -221,22 +245,32 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
                 instance = get(b)
                 owned.append(instance)
                 instances.append(instance)
-        method = best_method(shape)
-        reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
-        scale = np.asarray(error_scale(shape, points), dtype=np.float64)
-        point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
+        pair = isinstance(points, proximity.Shape)
+        if pair:
+            methods = set(shape.methods) & set(points.methods)
+            method = "certified" if "certified" in methods else "robust"
+            reference = np.asarray(proximity.distance(shape, points, method=method), dtype=np.float64)
+            scale = np.asarray(pair_scale(shape, points), dtype=np.float64)
+            point_rows = np.zeros(reference.shape + (0,))
+        else:
+            method = best_method(shape)
+            reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
+            scale = np.asarray(error_scale(shape, points), dtype=np.float64)
+            point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
         summaries, cases = [], []
         for backend in instances:
-            r = backend.closest_point(shape, points, tol=tol)
+            if pair:
+                r = backend.closest_points(shape, points)
+            else:
+                r = backend.closest_point(shape, points, tol=tol)
             summary, worst_cases = _summarise(backend.name, r, reference, scale, point_rows, worst)
             summaries.append(summary)
             cases.extend(worst_cases)
     finally:
         for instance in owned:
             instance.close()
-    return CrossCheck(
-        shape=_describe(shape), reference=method, summaries=tuple(summaries), worst=tuple(cases)
-    )
+    described = f"{_describe(shape)} and {_describe(points)}" if pair else _describe(shape)
+    return CrossCheck(shape=described, reference=method, summaries=tuple(summaries), worst=tuple(cases))
 
 
 def _describe(shape):
@@ -251,10 +285,14 @@ def _summarise(name, r, reference, scale, point_rows, worst):
     distance = np.asarray(r.result.distance, dtype=np.float64).reshape(-1)
     ref = reference.reshape(-1)
     tolerance = np.asarray(r.tolerance, dtype=np.float64).reshape(-1)
-    ok = failure == Failure.OK
+    # A pair in contact has a distance (0) and no witness points: it is compared.
+    ok = (failure == Failure.OK) | (failure == Failure.CONTACT)
     gap = np.abs(distance - ref)[ok]
     relative = gap / np.maximum(scale.reshape(-1)[ok], np.finfo(np.float64).tiny)
-    counts = {Failure(code).name: int(np.sum(failure == code)) for code in np.unique(failure[~ok])}
+    counts = {
+        Failure(code).name: int(np.sum(failure == code))
+        for code in np.unique(failure[failure != Failure.OK])
+    }
     summary = Summary(
         backend=name,
         model=r.model,
@@ -271,7 +309,7 @@ def _summarise(name, r, reference, scale, point_rows, worst):
     rows = np.flatnonzero(ok)
     order = np.argsort(-ratio, kind="stable")[:worst]
     shape = reference.shape
-    flat_points = point_rows.reshape(-1, point_rows.shape[-1])
+    flat_points = point_rows.reshape(failure.size, point_rows.shape[-1])
     cases = [
         Case(
             backend=name,

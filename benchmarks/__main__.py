@@ -4,9 +4,11 @@ Steps, each from the saved output of the one before:
 
 1. the suite (:mod:`benchmarks.suite`), with a progress bar on stderr,
    writes ``OUT/raw.json``;
-2. the charts (:mod:`benchmarks.charts`) and ``OUT/report.md``
-   (:mod:`benchmarks.report`) are drawn from that file;
-3. the speed comparison (``python -m benchmarks.speed``, when present)
+2. the stability sweeps of the primitive pairs
+   (:mod:`benchmarks.pair_stability`) write ``OUT/pair_stability.json``;
+3. the charts (:mod:`benchmarks.charts`) and ``OUT/report.md``
+   (:mod:`benchmarks.report`) are drawn from those files;
+4. the speed comparison (``python -m benchmarks.speed``, when present)
    runs in a new process; its output is saved to ``OUT/speed.txt`` and
    added to the report, and its verdicts on the project's targets to
    ``OUT/checks-speed.txt``, apart from what the report shows (one line on
@@ -15,9 +17,9 @@ Steps, each from the saved output of the one before:
 Options: ``--quick`` for a smoke run (small batches; about half a minute
 for the suite on two cores, kernels cached), ``--seed``,
 ``--out DIR`` (default ``bench-results``), ``--report-only`` to redraw the
-charts and report from existing raw data, ``--no-speed`` to skip step 3, and
-``--publish`` to copy the charts to ``docs/`` and rewrite the benchmark
-section of ``docs/benchmarks.md`` from the same data; ``--package-python`` is passed
+charts and report from existing raw data, ``--no-pairs`` and ``--no-speed``
+to skip step 2 or 4, and ``--publish`` to copy the charts to ``docs/`` and
+rewrite the benchmark sections of ``docs/benchmarks.md`` from the same data; ``--package-python`` is passed
 to the speed step (``make bench`` gives it an environment with the package
 alone, for the start-up rows).
 """
@@ -78,6 +80,7 @@ def main(argv=None):
     parser.add_argument(
         "--report-only", action="store_true", help="redraw charts and report from OUT/raw.json"
     )
+    parser.add_argument("--no-pairs", action="store_true", help="skip the primitive pairs' stability sweeps")
     parser.add_argument("--no-speed", action="store_true", help="skip the speed comparison step")
     parser.add_argument(
         "--publish",
@@ -93,28 +96,38 @@ def main(argv=None):
     args = parser.parse_args(argv)
 
     # Imported here so that --help answers without loading numba and the libraries.
-    from benchmarks import charts, report, suite
+    from benchmarks import charts, pair_stability, report, suite
 
     out = args.out
     raw_path = out / "raw.json"
     speed_path = out / "speed.txt"
+    pairs_path = out / "pair_stability.json"
     ok = True
     if not args.report_only:
         speed_path.unlink(missing_ok=True)  # a previous run's, which this run's report must not show
+        pairs_path.unlink(missing_ok=True)
         config = suite.QUICK if args.quick else suite.DEFAULT
         config = dataclasses.replace(config, seed=args.seed)
         start = time.perf_counter()
         raw = suite.run(config, progress=not args.no_progress)
         suite.save(raw, raw_path)
         print(f"raw results: {raw_path} ({time.perf_counter() - start:.0f} s)", file=sys.stderr)
+        if not args.no_pairs:
+            pairs_config = pair_stability.QUICK if args.quick else pair_stability.DEFAULT
+            pairs_config = dataclasses.replace(pairs_config, seed=args.seed)
+            pairs_raw = pair_stability.run(pairs_config, log=lambda text: print(text, file=sys.stderr))
+            suite.save(pairs_raw, pairs_path)
     raw = suite.load(raw_path)
     pngs = charts.draw_all(raw, out)
-    report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
+    pairs_raw = suite.load(pairs_path) if pairs_path.exists() else None
+    pairs_chart = charts.stability_pairs(pairs_raw, out / "stability_pairs.png") if pairs_raw else None
+    pairs_text = pair_stability.markdown(pairs_raw, pairs_chart, by_point=True) if pairs_raw else None
+    report.write(raw, out, pngs, speed_path if speed_path.exists() else None, pairs_text)
     if not args.report_only and not args.no_speed:
         checks = out / "checks-speed.txt"
         checks.unlink(missing_ok=True)
         ok = run_speed(raw["meta"]["config"]["quick"], speed_path, args.package_python, checks)
-        report.write(raw, out, pngs, speed_path if speed_path.exists() else None)
+        report.write(raw, out, pngs, speed_path if speed_path.exists() else None, pairs_text)
         if checks.exists():
             verdicts = checks.read_text(encoding="utf-8").splitlines()
             missed = sum(line.startswith("MISSED") for line in verdicts)
@@ -123,7 +136,9 @@ def main(argv=None):
     print(f"report: {out / 'report.md'}", file=sys.stderr)
     if args.publish:
         report.publish(raw, pngs, docs=ROOT / "docs", page=ROOT / "docs" / "benchmarks.md")
-        print("published: docs/*.png and the benchmark section of docs/benchmarks.md", file=sys.stderr)
+        if pairs_raw:
+            pair_stability.publish(pairs_raw, pairs_chart)
+        print("published: docs/*.png and the benchmark sections of docs/benchmarks.md", file=sys.stderr)
     return 0 if ok else 1
 
 

@@ -14,6 +14,10 @@ Drawn from the raw results only (:func:`benchmarks.suite.load`):
     swept difficulty, one line per method or backend, over a strip that
     shows the share of queries with no answer, so that failures are seen
     where they begin.
+``stability_pairs.png``
+    The same for the primitive pairs (segment-segment, segment-triangle,
+    triangle-triangle), from :mod:`benchmarks.pair_stability`'s own raw
+    data: one row per sweep, one column per pair.
 ``tessellation.png``
     For backends that cut circles and disks into ``K`` segments: error and
     time per query against ``K``, with the sagitta bound and proximity's
@@ -45,8 +49,10 @@ STYLE = {
     "trimesh": ("tab:purple", "v"),
     "trimesh[raw]": ("tab:pink", "<"),
     "pybullet": ("tab:brown", ">"),
+    "coal": ("tab:olive", "P"),
+    "numpy": ("tab:gray", "X"),
 }
-_SPARE = [("tab:olive", "P"), ("tab:cyan", "X"), ("tab:gray", "*"), ("black", "h")]
+_SPARE = [("tab:cyan", "*"), ("black", "h"), ("tab:pink", "d")]
 
 #: Smallest error drawn in eps*S: an exact answer (error 0) is drawn here.
 FLOOR = 1e-2
@@ -84,6 +90,13 @@ DIFFICULTY = {
     "disk_axis": "distance from the axis / R",
     "disk_rim": "distance from the rim / R",
     "disk_offset": "offset from the origin (R ~ 1e-3)",
+    "pair_contact": "gap (size ~1; negative: crossing)",
+    "pair_near_parallel": "angle between the features (rad)",
+    "pair_parallel": "exactly parallel features",
+    "pair_degenerate": "zero-length segment or zero-area triangle",
+    "pair_offset": "offset from the origin (size 1e-3)",
+    "pair_far": "distance / size",
+    "pair_magnitude": "coordinate magnitude",
 }
 
 DPI = 100
@@ -104,6 +117,12 @@ CAPTIONS = {
     ),
     "stability_triangle": _STABILITY_CAPTION,
     "stability_round": _STABILITY_CAPTION,
+    "stability_pairs": (
+        "What to look at: where a line rises above the dashed line (robust's pair bound, 16 eps·S) and where "
+        "its failure share (upper strip: no answer, or junk witness points) leaves 0. python-fcl and coal: "
+        "segments as capsules of radius 0, triangles as one-triangle hierarchies; numpy: the textbook "
+        "segment formula."
+    ),
     "tessellation": (
         "What to look at: the gap between the libraries' lines and proximity's flat blue lines; "
         "the libraries' error follows the sagitta and shrinks only as K, and with it their time, grows."
@@ -410,7 +429,16 @@ def _draw_front(ax, front, floor=FLOOR):
 
 #: Sweeps whose difficulty grows as the parameter shrinks: drawn with the
 #: axis reversed, so that every sweep gets harder to the right.
-SMALLER_IS_HARDER = {"near_surface", "sliver", "needle", "small", "disk_axis", "disk_rim"}
+SMALLER_IS_HARDER = {
+    "near_surface",
+    "sliver",
+    "needle",
+    "small",
+    "disk_axis",
+    "disk_rim",
+    "pair_contact",
+    "pair_near_parallel",
+}
 
 
 def _axis_values(name, members):
@@ -449,11 +477,12 @@ def _floor_label(value, _position=None):
     return f"$10^{{{round(math.log10(value))}}}$"
 
 
-def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
-    """One sweep: the share of failed queries on ``ax_fail``, the worst error on ``ax``."""
+def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s", bound=BOUND):
+    """One sweep: the share of failed queries on ``ax_fail``, the worst error on ``ax``, with the
+    dashed line at ``bound`` (eps·S)."""
     members, x, ticklabels, note = _axis_values(name, members)
     x = np.array(x, dtype=np.float64)
-    worst_seen = BOUND
+    worst_seen = bound
     any_failure = False
     for entity in members[0]["results"]:
         colour, marker = style(entity)
@@ -482,7 +511,7 @@ def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
                 neighbours = [j for j in (i - 1, i + 1) if 0 <= j < len(failed)]
                 if any(failed[j] == 0 for j in neighbours):
                     ax.axvline(x[i], color=colour, ls=":", lw=1.2, alpha=0.8)
-    ax.axhline(BOUND, color="gray", ls="--", lw=0.8)
+    ax.axhline(bound, color="gray", ls="--", lw=0.8)
     ax.set_yscale("log")
     ax.set_ylim(FLOOR / 2, max(worst_seen * 10, 1e2))
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
@@ -490,7 +519,7 @@ def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
     ax.yaxis.set_major_locator(LogLocator(base=10.0, numticks=8))
     ax.yaxis.set_major_formatter(FuncFormatter(_floor_label))
     ax.yaxis.set_minor_formatter(NullFormatter())
-    ax.set_xticks(x, ticklabels)
+    ax.set_xticks(x, ticklabels, **({"fontsize": 7} if len(x) > 6 else {}))
     ax.grid(True, alpha=0.3)
     ax_fail.set_ylim(-8, 108)
     ax_fail.set_yticks([0, 50, 100])
@@ -511,17 +540,24 @@ def _sweep_panel(ax_fail, ax, kind, name, members, unit="error_eps_s"):
     ax.set_xlim(x.min() - pad, x.max() + pad)
     label = DIFFICULTY.get(name, name)
     ax.set_xlabel(f"{label} ({note})" if note else label, fontsize=8)
-    title = name.removeprefix("disk_").replace("_", " ")
-    ax_fail.set_title(f"{kind}: {title}")
+    title = name.removeprefix("disk_").removeprefix("pair_").replace("_", " ")
+    ax_fail.set_title(f"{kind.replace('_', '–')}: {title}")
 
 
-def stability(raw, path, kinds, title):
-    """Every sweep of the given query types: worst error and failure share against difficulty."""
+def stability(raw, path, kinds, title, bound=BOUND, by_sweep=False):
+    """Every sweep of the given query types: worst error and failure share against difficulty.
+
+    ``bound`` is robust's, in eps·S, drawn dashed; ``by_sweep`` puts one sweep per row, the
+    query types across (the types' sweeps must then be the same), else the types in turn.
+    """
     plt = _plt()
     panels = [(kind, name, members) for kind in kinds for name, members in summary.sweeps(raw, kind).items()]
+    if by_sweep:
+        order = list(dict.fromkeys(name for _, name, _ in panels))
+        panels.sort(key=lambda panel: order.index(panel[1]))
     if not panels:
         return None
-    ncols = 3
+    ncols = len(kinds) if by_sweep else 3
     nrows = math.ceil(len(panels) / ncols)
     height = 3.6 * nrows + 1.7
     fig = plt.figure(figsize=(4.2 * ncols, height))
@@ -540,7 +576,7 @@ def stability(raw, path, kinds, title):
         inner = outer[i // ncols, i % ncols].subgridspec(2, 1, height_ratios=(1, 3), hspace=0.08)
         ax_fail = fig.add_subplot(inner[0])
         ax = fig.add_subplot(inner[1], sharex=ax_fail)
-        _sweep_panel(ax_fail, ax, kind, name, members)
+        _sweep_panel(ax_fail, ax, kind, name, members, bound=bound)
         if i % ncols == 0:
             ax.set_ylabel("worst error (eps·S)")
             ax_fail.set_ylabel("failed %")
@@ -549,7 +585,7 @@ def stability(raw, path, kinds, title):
                 handles.setdefault(line.get_label(), line)
     from matplotlib.lines import Line2D
 
-    labels = list(handles) + ["robust's bound, 8 eps·S", "failures begin"]
+    labels = list(handles) + [f"robust's bound, {bound:g} eps·S", "failures begin"]
     lines = list(handles.values()) + [
         Line2D([], [], color="gray", ls="--", lw=0.8),
         Line2D([], [], color="gray", ls=":", lw=1.2),
@@ -741,6 +777,21 @@ def mesh_peers(raw, path):
     _caption(fig, "mesh_peers")
     fig.tight_layout(rect=(0, 1.9 / fig.get_figheight(), 1, 1 - 0.7 / fig.get_figheight()))
     return _save(fig, path)
+
+
+def stability_pairs(raw, path):
+    """The pair sweeps of :mod:`benchmarks.pair_stability`'s raw data, one row per sweep."""
+    from proximity.testing.scenes import PAIRS
+
+    with np.errstate(over="ignore"):
+        return stability(
+            raw,
+            path,
+            tuple(PAIRS),
+            "Stability of the primitive pairs: worst error and failures along each sweep",
+            bound=16.0,
+            by_sweep=True,
+        )
 
 
 def draw_all(raw, out):

@@ -1,25 +1,57 @@
-"""Mesh against mesh: the distance between two posed meshes, against python-fcl and coal.
+"""Mesh against mesh: the distance between two posed meshes, against python-fcl, coal, trimesh and pybullet.
 
     python -m benchmarks.pairs [--quick] [--out DIR] [--seed 0]
 
-**The pair.**  An icosphere of 20,480 faces (radius 1) and a torus of
-20,480 faces (radii 1 and 0.35; ``--quick``: 1,280 faces each), the torus
-turned at random and moved along a random direction until the two are
-about ``gap`` apart (by proximity's own answer), for gaps 1, 1e-2 and
-1e-4, and then moved 0.05 further in to overlap; 5 poses per gap
-(``--quick``: 2).  Every library answers the same pairs of posed meshes,
-its hierarchies built once outside the timing:
+**The pairs.**  An icosphere (radius 1) against a torus (radii 1 and 0.35)
+at two sizes, a table each: 5,120 faces each (``icosphere(4)``,
+``torus(64, 40)``) and 20,480 each (``icosphere(5)``, ``torus(128, 80)``;
+``--quick``: 320 and 1,280).  The torus is turned at random and moved along
+a random direction until the two are about ``gap`` apart (by proximity's
+own answer), for gaps 1, 1e-2 and 1e-4, and then moved 0.05 further in to
+overlap; 5 poses per gap (``--quick``: 2), the same directions and turns at
+both sizes.  Every library answers the same pairs of posed meshes, its
+hierarchies built once outside the timing (but where said):
 
 * proximity: ``proximity.distance(sphere, torus.transformed(T))``, the
   ``robust`` and the ``certified`` method, one thread (one query);
 * python-fcl: ``fcl.distance`` of two ``CollisionObject`` over
   ``BVHModel`` (OBBRSS), the torus's moved by ``setTransform``;
 * coal: ``coal.distance`` of two ``BVHModelOBBRSS`` with their
-  ``Transform3s``.
+  ``Transform3s``;
+* trimesh (python-fcl behind it), ``CollisionManager.min_distance_other``
+  between two managers of one mesh each, the torus's moved by
+  ``set_transform``.  trimesh makes a mesh it finds convex (the icosphere)
+  an ``fcl.Convex`` and the torus a ``BVHModel``, and asks for signed
+  distances: overlapping meshes give a negative number that is not the
+  depth;
+* trimesh, ``min_distance_single(torus, transform=T)`` against a manager
+  holding the icosphere: it builds the torus's hierarchy again in every
+  call, and the time includes that build;
+* pybullet, ``getClosestPoints`` between two static bodies in a ``DIRECT``
+  client, the torus's moved by ``resetBasePositionAndOrientation`` (its
+  rotation as a quaternion).  pybullet 3.2 makes ``createCollisionShape(
+  GEOM_MESH, vertices=..., indices=...)`` a BVH triangle mesh whatever the
+  mass and flags, and ``vertices=...`` alone their convex hull; a pair of
+  triangle meshes has no collision algorithm and reports no points at all.
+  Three models, as its users choose: *both meshes* (no answer, shown as
+  such), *sphere hull to mesh* (the icosphere's hull, which is the
+  icosphere, against the torus's triangles: the right shapes; each call
+  runs GJK between the hull and every triangle near the sphere's box, so
+  its cost grows with the faces of both) and *both hulls* (fast, but the
+  torus's hull fills its hole).  The threshold passed is ``1.1 gap +
+  1e-3`` (overlapping: 1e-3), a distance the caller knew the answer to be
+  within: pybullet's best case (a threshold of 2 took 3-9 times longer at
+  20,480 faces).  As the point adapter ``adapters/pybullet_backend.py``,
+  each body's collision margin is set to 0 (default 0.001), read back and
+  added to the distance (pybullet reports the distance between the shapes
+  grown by their margins; the nearest of its points is kept).
 
 A peer that is not installed, or fails to import, is skipped.  Timing: each
 pose's query is repeated (5 times, ``--quick``: 2) by each library in
-turn, the least time kept; the table gives the median over the poses.
+turn, the least time kept; the table gives the median over the poses.  The
+slow ones, ``min_distance_single`` and pybullet's sphere hull to mesh
+(marked ``*``; 40-120 ms and 50-1,500 ms a call here), are timed on one
+call per pose, whose answer is the one checked.
 
 **Accuracy** against the exact minimum over all pairs of faces of the
 torus posed in float64 (``torus.transformed(T)``'s vertices ``R V + t``
@@ -31,9 +63,9 @@ those faces are evaluated by the ``robust`` triangle pair, and those whose
 answer could be the least (within twice its bound) in rational arithmetic
 (:mod:`proximity.testing.exact`).  A negative answer of a peer (its
 convention for "in collision") counts as 0.  The table gives the largest
-absolute error over the poses.
+absolute error over the poses, and how many poses had no answer.
 
-**Hausdorff distance.**  The same two meshes, the torus turned at random
+**Hausdorff distance.**  The larger two meshes, the torus turned at random
 and moved 0.5 along a random direction (3 poses, ``--quick``: 2):
 ``proximity.hausdorff_distance(sphere, torus.transformed(T))`` (``robust``,
 ``rtol=1e-6``), its certified bounds and the time of the call; beside it,
@@ -57,7 +89,8 @@ pairs (``--quick``: 40).
 
 ``OUT/pairs.json`` holds the raw data; the project's targets (proximity at
 least 2x faster than python-fcl and coal at a gap of 1e-2, batched
-primitive pairs at least 20x coal's rate per call) are checked apart in
+primitive pairs at least 20x coal's rate per call; the meshes of 20,480
+faces, ``--quick``: 1,280) are checked apart in
 ``OUT/checks-pairs.txt``.
 """
 
@@ -72,6 +105,7 @@ import mpmath
 import numpy as np
 
 import proximity
+from adapters.pybullet_backend import load as load_pybullet
 from benchmarks.moving import _installed, random_rotations
 from proximity.posed import to_world
 from proximity.testing import exact
@@ -83,8 +117,10 @@ EPS = 2.0**-52
 
 
 def meshes(quick):
-    """``((vertices, faces) of the icosphere, of the torus)``."""
-    return (icosphere(3), torus(32, 20)) if quick else (icosphere(5), torus(128, 80))
+    """The pairs ``((vertices, faces) of the icosphere, of the torus)``, the smaller first."""
+    if quick:
+        return [(icosphere(2), torus(16, 10)), (icosphere(3), torus(32, 20))]
+    return [(icosphere(4), torus(64, 40)), (icosphere(5), torus(128, 80))]
 
 
 def poses(sphere, ring, rng, gap, count):
@@ -155,7 +191,7 @@ def fcl_query(mesh_a, mesh_b):
     b = fcl.CollisionObject(_fcl(*mesh_b), fcl.Transform())
     request = fcl.DistanceRequest()
 
-    def query(pose):
+    def query(pose, reach):
         b.setTransform(fcl.Transform(pose[:3, :3], pose[:3, 3]))
         return fcl.distance(a, b, request, fcl.DistanceResult())
 
@@ -181,7 +217,7 @@ def coal_query(mesh_a, mesh_b):
     identity = coal.Transform3s()
     request, result = coal.DistanceRequest(), coal.DistanceResult()
 
-    def query(pose):
+    def query(pose, reach):
         result.clear()
         return coal.distance(a, identity, b, coal.Transform3s(pose[:3, :3], pose[:3, 3]), request, result)
 
@@ -191,17 +227,91 @@ def coal_query(mesh_a, mesh_b):
 def proximity_query(mesh_a, mesh_b, method):
     a, b = proximity.TriangleMesh(*mesh_a), proximity.TriangleMesh(*mesh_b)
 
-    def query(pose):
+    def query(pose, reach):
         return float(proximity.distance(a, b.transformed(pose), method=method))
 
     return query
 
 
+def trimesh_other_query(mesh_a, mesh_b):
+    """A function of a pose: ``CollisionManager.min_distance_other`` between two managers of one mesh
+    each, b's moved by ``set_transform`` (its hierarchy built once)."""
+    import trimesh
+
+    a, b = trimesh.collision.CollisionManager(), trimesh.collision.CollisionManager()
+    a.add_object("a", trimesh.Trimesh(*mesh_a, process=False))
+    b.add_object("b", trimesh.Trimesh(*mesh_b, process=False))
+
+    def query(pose, reach):
+        b.set_transform("b", pose)
+        return a.min_distance_other(b)
+
+    return query
+
+
+def trimesh_single_query(mesh_a, mesh_b):
+    """A function of a pose: ``CollisionManager.min_distance_single`` of mesh b, posed, against a
+    manager holding a; trimesh builds b's hierarchy again in every call."""
+    import trimesh
+
+    a = trimesh.collision.CollisionManager()
+    a.add_object("a", trimesh.Trimesh(*mesh_a, process=False))
+    b = trimesh.Trimesh(*mesh_b, process=False)
+
+    def query(pose, reach):
+        return a.min_distance_single(b, transform=pose)
+
+    return query
+
+
+def _pybullet_query(hull_a, hull_b):
+    """A maker of functions of a pose: pybullet's ``getClosestPoints`` between two static bodies, each
+    its mesh's convex hull (``hull_*``: vertices alone) or its triangles (vertices and indices: a BVH
+    triangle mesh); ``None`` where it reports no points."""
+
+    def make(mesh_a, mesh_b):
+        from scipy.spatial.transform import Rotation
+
+        pybullet = load_pybullet()
+        client = pybullet.connect(pybullet.DIRECT)
+
+        def body(vertices, faces, hull):
+            triangles = {} if hull else {"indices": faces.ravel().tolist()}
+            shape = pybullet.createCollisionShape(pybullet.GEOM_MESH, vertices=vertices.tolist(),
+                                                  physicsClientId=client, **triangles)  # fmt: skip
+            made = pybullet.createMultiBody(baseMass=0, baseCollisionShapeIndex=shape, physicsClientId=client)
+            # As the point adapter: margin 0 (default 0.001), read back and added to every distance.
+            pybullet.changeDynamics(made, -1, collisionMargin=0.0, physicsClientId=client)
+            return made, pybullet.getDynamicsInfo(made, -1, physicsClientId=client)[-1]
+
+        (a, margin_a), (b, margin_b) = body(*mesh_a, hull_a), body(*mesh_b, hull_b)
+
+        def query(pose, reach):
+            turn = Rotation.from_matrix(pose[:3, :3]).as_quat().tolist()
+            pybullet.resetBasePositionAndOrientation(b, pose[:3, 3].tolist(), turn, physicsClientId=client)
+            found = pybullet.getClosestPoints(a, b, reach, physicsClientId=client)
+            # Distances between the shapes grown by their margins; negative in contact.
+            return min(c[8] for c in found) + margin_a + margin_b if found else None
+
+        query.close = lambda: pybullet.disconnect(physicsClientId=client)
+        return query
+
+    return make
+
+
+#: ``(key, label, modules to import, maker, repeats)``: a maker takes the two meshes ``(vertices,
+#: faces)`` and gives a function of the pose of b and a distance the answer is known to be within (the
+#: threshold pybullet needs); repeats ``None``: the run's, else that many.
 LIBRARIES = (
-    ("robust", "proximity, robust", None, lambda a, b: proximity_query(a, b, "robust")),
-    ("certified", "proximity, certified", None, lambda a, b: proximity_query(a, b, "certified")),
-    ("fcl", "python-fcl", "fcl", fcl_query),
-    ("coal", "coal", "coal", coal_query),
+    ("robust", "proximity, robust", None, lambda a, b: proximity_query(a, b, "robust"), None),
+    ("certified", "proximity, certified", None, lambda a, b: proximity_query(a, b, "certified"), None),
+    ("fcl", "python-fcl", "fcl", fcl_query, None),
+    ("coal", "coal", "coal", coal_query, None),
+    ("trimesh", "trimesh, min_distance_other", "trimesh fcl", trimesh_other_query, None),
+    ("trimesh_single", "trimesh, min_distance_single", "trimesh fcl", trimesh_single_query, 1),
+    ("pybullet_meshes", "pybullet, both meshes", "pybullet", _pybullet_query(False, False), None),
+    ("pybullet_hull_mesh", "pybullet, sphere hull to mesh", "pybullet", _pybullet_query(True, False), 1),
+    ("pybullet_hulls", "pybullet, both hulls", "pybullet", _pybullet_query(True, True), None),
 )
 
 
@@ -374,38 +484,58 @@ def primitives(rng, quick, log=print, sizes=None):
     return rows
 
 
-def run(quick=False, seed=0, log=print):
-    """Every gap and library; the raw data."""
-    rng = np.random.default_rng(seed)
-    mesh_a, mesh_b = meshes(quick)
-    count, repeats = (2, 2) if quick else (5, 5)
+def _missing(modules):
+    """Why one of ``modules`` (names separated by spaces) cannot be imported, or ``None``."""
+    for module in modules.split():
+        if module == "pybullet":
+            try:
+                load_pybullet()  # without its build banner on the report's stdout
+            except Exception as exc:  # noqa: BLE001 (as _installed)
+                return f"{type(exc).__name__}: {exc}"
+        problem = _installed(module)
+        if problem:
+            return problem
+    return None
+
+
+def mesh_pair(mesh_a, mesh_b, rng, count, repeats, log=print):
+    """Every gap and library for one pair of meshes: ``(rows, gaps)``, the libraries and the raw data."""
     sphere, ring = proximity.TriangleMesh(*mesh_a), proximity.TriangleMesh(*mesh_b)
-    queries, rows = {}, {}
-    for key, label, module, make in LIBRARIES:
-        problem = _installed(module) if module else None
+    queries, rows, times_of = {}, {}, {}
+    for key, label, modules, make, own_repeats in LIBRARIES:
+        problem = _missing(modules) if modules else None
         rows[key] = {"label": label}
         if problem:
             rows[key]["skipped"] = problem
             log(f"{label}: skipped ({problem})")
             continue
         queries[key] = make(mesh_a, mesh_b)
-        queries[key](np.eye(4))  # compiled, and the hierarchies built
+        queries[key](np.eye(4), 10.0)  # compiled, and the hierarchies built
+        times_of[key] = own_repeats or repeats
+        rows[key]["repeats"] = times_of[key]
     gaps = []
     for gap in GAPS:
-        log(f"gap {gap:g}: posing")
+        log(f"{len(mesh_a[1]):,} faces, gap {gap:g}: posing")
         pose_list = poses(sphere, ring, rng, gap, count)
+        # pybullet's threshold: the poses are within 0.1% of the gap (overlapping: touching).
+        reach = 1.1 * max(gap, 0.0) + 1e-3
         times = {key: [] for key in queries}
         answers = {key: [] for key in queries}
         references, exact_values, pairs_checked = [], [], []
         for pose in pose_list:
-            for key, query in queries.items():
-                answers[key].append(query(pose))
             best = {key: np.inf for key in queries}
-            for _ in range(repeats):
+            for key, query in queries.items():
+                if times_of[key] > 1:
+                    answers[key].append(query(pose, reach))
+            for k in range(repeats):
                 for key, query in queries.items():  # in turn, so that a busy machine slows all alike
+                    if k >= times_of[key]:
+                        continue
                     start = time.perf_counter()
-                    query(pose)
+                    answer = query(pose, reach)
                     best[key] = min(best[key], time.perf_counter() - start)
+                    if times_of[key] == 1:  # a slow peer: its one timed call gives the answer
+                        answers[key].append(answer)
             for key in queries:
                 times[key].append(best[key])
             posed_b = to_world(mesh_b[0], pose[:3, :3], pose[:3, 3])
@@ -416,31 +546,48 @@ def run(quick=False, seed=0, log=print):
             pairs_checked.append(checked)
         row = {"gap": gap, "exact": references, "face_pairs_checked": pairs_checked, "libraries": {}}
         for key in queries:
-            d = np.maximum(np.array(answers[key], dtype=np.float64), 0.0)
+            errors = []
             # In mpmath: an error below the ulp of the distance is not lost to rounding.
             with mpmath.workprec(PREC):
-                errors = [float(abs(mpmath.mpf(float(x)) - r)) for x, r in zip(d, exact_values, strict=True)]
+                for x, r in zip(answers[key], exact_values, strict=True):
+                    if x is not None:  # a negative answer (in contact) counts as 0
+                        errors.append(float(abs(mpmath.mpf(max(float(x), 0.0)) - r)))
             row["libraries"][key] = {
                 "time": float(np.median(times[key])),
                 "times": times[key],
-                "answers": [float(x) for x in answers[key]],
-                "error": max(errors),
+                "answers": [None if x is None else float(x) for x in answers[key]],
+                "error": max(errors) if errors else None,
+                "missing": sum(x is None for x in answers[key]),
             }
         gaps.append(row)
         timing = ", ".join(f"{k} {v['time'] * 1e3:.3f} ms" for k, v in row["libraries"].items())
-        log(f"gap {gap:g}: {timing}")
+        log(f"{len(mesh_a[1]):,} faces, gap {gap:g}: {timing}")
+    for query in queries.values():
+        getattr(query, "close", lambda: None)()
+    return rows, gaps
+
+
+def run(quick=False, seed=0, log=print):
+    """Every size, gap and library; the raw data."""
+    count, repeats = (2, 2) if quick else (5, 5)
+    sizes = []
+    for mesh_a, mesh_b in meshes(quick):
+        # The same directions and turns for every size; the largest leaves rng where the rows after
+        # it have always started.
+        rng = np.random.default_rng(seed)
+        rows, gaps = mesh_pair(mesh_a, mesh_b, rng, count, repeats, log)
+        sizes.append({"faces": [len(mesh_a[1]), len(mesh_b[1])], "rows": rows, "gaps": gaps})
     distances = hausdorff(mesh_a, mesh_b, rng, quick, log)
     batches = primitives(rng, quick, log)
-    meta = {"cpus": os.cpu_count(), "quick": quick, "seed": seed, "faces": [len(mesh_a[1]), len(mesh_b[1])],
-            "poses": count, "repeats": repeats, "load_average": list(os.getloadavg()),
-            "proximity": proximity.__version__}  # fmt: skip
-    return {"meta": meta, "rows": rows, "gaps": gaps, "hausdorff": distances, "primitives": batches}
+    meta = {"cpus": os.cpu_count(), "quick": quick, "seed": seed, "poses": count, "repeats": repeats,
+            "load_average": list(os.getloadavg()), "proximity": proximity.__version__}  # fmt: skip
+    return {"meta": meta, "meshes": sizes, "hausdorff": distances, "primitives": batches}
 
 
 def checks(raw):
     """The project's target: ``(missed, lines)``."""
     lines, missed = [], 0
-    for row in raw["gaps"]:
+    for row in raw["meshes"][-1]["gaps"] if raw.get("meshes") else []:  # the largest meshes
         if row["gap"] != 1e-2:
             continue
         ours = row["libraries"]["robust"]["time"]
@@ -466,24 +613,43 @@ def checks(raw):
     return missed, lines
 
 
-def report(raw):
-    """The run as text: time per query and largest error per gap and library."""
-    meta = raw["meta"]
-    lines = [f"icosphere of {meta['faces'][0]:,} faces against a torus of {meta['faces'][1]:,}, "
-             f"{meta['poses']} poses per gap; median ms per query (least of {meta['repeats']}), "
-             "largest error against the exact distance"]  # fmt: skip
-    keys = [k for k in raw["rows"] if "skipped" not in raw["rows"][k]]
-    head = "".join(f"{raw['rows'][k]['label']:>34s}" for k in keys)
-    lines.append(f"  {'gap':>8s}{head}")
-    for row in raw["gaps"]:
-        cells = "".join(
-            f"{row['libraries'][k]['time'] * 1e3:>14.3f} ms  err {row['libraries'][k]['error']:8.1e}"
-            for k in keys
-        )
-        lines.append(f"  {'overlap' if row['gap'] < 0 else format(row['gap'], 'g'):>8s}{cells}")
-    for row in raw["rows"].values():
+def _cell(result):
+    """One library at one gap: time per query and the largest error, or how many answers are missing."""
+    text = f"{result['time'] * 1e3:>14.3f} ms  "
+    if result["error"] is None:
+        return text + f"{'no answer':>12s}"
+    text += f"err {result['error']:8.1e}"
+    return text + (f" ({result['missing']} none)" if result["missing"] else "")
+
+
+def mesh_report(size, meta, columns=4):
+    """One pair of meshes as text: a block of the gaps per ``columns`` libraries."""
+    faces, rows = size["faces"], size["rows"]
+    lines = [f"icosphere of {faces[0]:,} faces against a torus of {faces[1]:,}, {meta['poses']} poses per "
+             f"gap; median ms per query (least of {meta['repeats']}), largest error against the exact "
+             "distance"]  # fmt: skip
+    keys = [k for k in rows if "skipped" not in rows[k]]
+    for first in range(0, len(keys), columns):
+        block = keys[first : first + columns]
+        labels = [rows[k]["label"] + ("*" if rows[k]["repeats"] == 1 else "") for k in block]
+        lines.append(f"  {'gap':>8s}" + "".join(f"{label:>34s}" for label in labels))
+        for row in size["gaps"]:
+            cells = "".join(f"{_cell(row['libraries'][k]):>34s}" for k in block)
+            lines.append(f"  {'overlap' if row['gap'] < 0 else format(row['gap'], 'g'):>8s}{cells}")
+    if any(rows[k]["repeats"] == 1 for k in keys):
+        lines.append("  *: one timed call per pose, which gives the answer")
+    for row in rows.values():
         if "skipped" in row:
             lines.append(f"  {row['label']}: skipped ({row['skipped']})")
+    return lines
+
+
+def report(raw):
+    """The run as text: time per query and largest error per size, gap and library."""
+    meta = raw["meta"]
+    lines = []
+    for size in raw["meshes"]:
+        lines += mesh_report(size, meta)
     if "hausdorff" in raw:
         lines += hausdorff_report(raw["hausdorff"])
     if "primitives" in raw:

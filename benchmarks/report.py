@@ -247,8 +247,9 @@ def _tessellation_table(raw):
     )
 
 
-def render(raw, charts, speed_text=None):
-    """The text of ``report.md``."""
+def render(raw, charts, speed_text=None, pairs_text=None):
+    """The text of ``report.md``; ``pairs_text``: the section of the primitive pairs' stability
+    sweeps (:func:`benchmarks.pair_stability.markdown`), if they were run."""
     cfg = raw["meta"]["config"]
     parts = [
         "# Benchmark report",
@@ -290,16 +291,19 @@ def render(raw, charts, speed_text=None):
     for kind in summary.KINDS:
         parts += [_family_tables(raw, kind)]
     parts += ["## Tessellation", "", _tessellation_table(raw)]
+    if pairs_text is not None:
+        parts += ["## Stability of the primitive pairs (`benchmarks.pair_stability`)", "", pairs_text]
     if speed_text is not None:
         parts += ["## Speed comparison (`benchmarks.speed`)", "", "```text", speed_text.rstrip(), "```", ""]
     return "\n".join(parts)
 
 
-def write(raw, out, charts, speed_path=None):
-    """Write ``out/report.md``; ``speed_path`` is the saved output of the speed step, if any."""
+def write(raw, out, charts, speed_path=None, pairs_text=None):
+    """Write ``out/report.md``; ``speed_path`` is the saved output of the speed step, if any;
+    ``pairs_text`` as in :func:`render`."""
     speed_text = Path(speed_path).read_text(encoding="utf-8") if speed_path else None
     path = Path(out) / "report.md"
-    path.write_text(render(raw, charts, speed_text), encoding="utf-8")
+    path.write_text(render(raw, charts, speed_text, pairs_text), encoding="utf-8")
     return path
 
 

@@ -45,6 +45,7 @@ REASONS = {
     "FALSE_TOUCHING": "false touching",
     "POINT_OFF_SHAPE": "point off shape",
     "INCONSISTENT": "inconsistent",
+    "NO_WITNESS": "no witness points",
 }
 
 

@@ -4,7 +4,9 @@ The summary never states an error where d* = 0 in ulps of 0; relative
 errors leave those rows out; the speed table states facts and the targets
 go to the checks; the mesh chart draws; the point-cloud benchmark runs and
 cleans up after itself; the mesh-pair benchmark's reference is the exact
-minimum over every pair of faces.
+minimum over every pair of faces; the pair stability sweeps hold proximity's
+methods to their bounds, count junk witness points and sentinels as failures,
+and draw.
 """
 
 import json
@@ -146,6 +148,33 @@ def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
         assert (expected == 0) == (gap < 0)
 
 
+def test_the_mesh_pair_rows_hold_every_library_or_why_it_was_skipped():
+    import numpy as np
+
+    from benchmarks import pairs
+    from proximity.testing.meshes import icosphere, torus
+
+    rng = np.random.default_rng(0)
+    rows, gaps = pairs.mesh_pair(icosphere(1), torus(8, 6), rng, 1, 2, log=lambda _: None)
+    assert set(rows) == {key for key, *_ in pairs.LIBRARIES}
+    assert [row["gap"] for row in gaps] == list(pairs.GAPS)
+    for row in gaps:
+        for key, result in row["libraries"].items():
+            assert len(result["answers"]) == 1 and result["missing"] == (result["answers"][0] is None)
+            assert (result["error"] is None) == bool(result["missing"])
+            if key in ("robust", "certified"):
+                assert result["error"] <= 1e-15
+        if "pybullet_meshes" in row["libraries"]:  # two triangle meshes: pybullet reports no points
+            assert row["libraries"]["pybullet_meshes"]["answers"] == [None]
+    size = {"faces": [80, 96], "rows": rows, "gaps": gaps}
+    lines = pairs.mesh_report(size, {"poses": 1, "repeats": 2})
+    blocks = sum(line.split()[:1] == ["gap"] for line in lines)
+    assert "icosphere of 80 faces" in lines[0] and blocks >= 1
+    assert sum(line.split()[:1] == ["overlap"] for line in lines) == blocks
+    missed, lines = pairs.checks({"meshes": [size]})
+    assert missed == sum(line.startswith("MISSED") for line in lines)
+
+
 def test_the_hausdorff_rows_bracket_a_sampled_estimate():
     import numpy as np
 
@@ -186,3 +215,66 @@ def test_the_memory_row_measures_a_query_in_a_fresh_process():
     # The outputs of 10,000 closest points: distance, squared distance, point, feature, barycentrics.
     assert row["baseline"] * 2**20 == 10_000 * (8 + 8 + 24 + 1 + 24)
     assert row["ours"] >= row["baseline"]
+
+
+def _pair_sweeps(monkeypatch, n=6):
+    """A short run of the pair stability sweeps: two points of two sweeps per pair."""
+    from benchmarks import pair_stability
+    from proximity.testing import scenes
+
+    monkeypatch.setattr(
+        pair_stability,
+        "SWEEPS",
+        (
+            (scenes.pair_contact, "gap", (1e-3, -1e-9)),
+            (scenes.pair_degenerate, "kind", ("point", "collinear")),
+        ),
+    )
+    return pair_stability, pair_stability.run(pair_stability.Config(n=n), log=lambda _: None)
+
+
+def test_the_pair_sweeps_judge_every_answer_and_name_the_missing_peers(monkeypatch, tmp_path):
+    from benchmarks import charts, summary
+
+    pair_stability, raw = _pair_sweeps(monkeypatch)
+    installed = [name for name, label in pair_stability.PEERS.items() if label not in raw["meta"]["skipped"]]
+    assert len(raw["families"]) == 3 * 4
+    for f in raw["families"]:
+        results = f["results"]
+        baseline = {"numpy"} if f["kind"] == "segment_segment" else set()
+        assert set(results) == {"robust", "certified", *installed} | baseline
+        robust = summary.stats([results["robust"]])
+        certified = summary.stats([results["certified"]])
+        assert robust.failed == 0 and robust.worst["error_eps_s"] <= 16
+        assert certified.failed == 0 and certified.worst["error_ulps"] <= 1
+    assert len(summary.sweeps(raw, "triangle_triangle")) == 2
+    table = pair_stability.table(raw).splitlines()
+    assert len(table) == 2 + 3 * 2 and table[2].startswith("| segment–segment | contact (0.001, -1e-09) |")
+    path = charts.stability_pairs(raw, tmp_path / "stability_pairs.png")
+    assert path.exists() and path.stat().st_size > 10_000
+
+
+def test_junk_witness_points_are_failures_and_sentinels_are_not_distances():
+    import numpy as np
+
+    from benchmarks import pair_stability
+    from proximity.testing import scenes
+    from proximity.testing.accuracy import pair_reference
+
+    # Two triangles crossing through each other, and the same two 1 apart along z.
+    a = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    b = np.array([[0.2, 0.2, -0.5], [0.2, 0.2, 0.5], [0.6, 0.3, 0.0]])
+    scene = scenes.PairScene(np.stack([a] * 5), np.stack([b, b, b, b + [0, 0, 1.5], b + [0, 0, 1.5]]))
+    ref = pair_reference("triangle_triangle", scene)
+    distance = np.array([0.0, 0.0, 1.7976931348623157e308, -1.0, 1.0])
+    # Row 0: distance 0, the points on the shapes but 0.41 apart (junk); row 1: a common point;
+    # row 2: fcl's "no distance"; row 3: fcl's contact sentinel for shapes apart, with points at
+    # the origin (a's vertex, b far from it); row 4: right, the points 1 apart on the shapes.
+    point_a = np.array([[0.2, 0.2, 0.0], [0.2, 0.2, 0.0], [np.nan] * 3, [0.0, 0.0, 0.0], [0.2, 0.2, 0.0]])
+    point_b = np.array([[0.6, 0.3, 0.0], [0.2, 0.2, 0.0], [np.nan] * 3, [0.0, 0.0, 0.0], [0.2, 0.2, 1.0]])
+    failed = pair_stability._failures("triangle_triangle", scene, ref, distance, point_a, point_b)
+    got = {reason: list(rows) for reason, rows in failed.items() if len(rows)}
+    assert got == {"INCONSISTENT": [0], "INF": [2], "POINT_OFF_SHAPE": [3]}
+    point_a[4] = np.nan
+    failed = pair_stability._failures("triangle_triangle", scene, ref, distance, point_a, point_b)
+    assert list(failed["NO_WITNESS"]) == [4]

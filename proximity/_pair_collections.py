@@ -27,7 +27,7 @@ def side_of(collection=None, kinds=None, params=None):
     if collection is not None:
         tree = collection._tree
         side = bp.from_tree(tree)
-        return side, int(tree.depth), tree.present, bp.node_data(tree)[2]
+        return side, int(tree.depth), tree.present, bp.node_data(tree)[1]
     side = bp.forest(kinds, params)
     return side, 0, primitives.present(kinds), bp.side_magnitude(side)
 

@@ -703,7 +703,7 @@ class TriangleMesh(Collection):
                 v, self.faces, tree.index, tree.child, tree.count, tree.kinds
             )
             # The float32 rows it keeps on recycled memory too, as the refit's.
-            read = broadphase.build.faces_reader(v, self.faces, tree.index) if tree.indexed else None
+            read = (lambda: broadphase.build.moved_faces(v, tree)) if tree.indexed else None
             moved = broadphase.assemble(
                 tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
                 empty=_pool.empty, faces=read,

@@ -24,6 +24,8 @@ pair registry (:mod:`proximity.pairs`):
   batch of its posed vertices.
 """
 
+import weakref
+
 import numpy as np
 
 from . import _lazy, _threads, pairs, primitives
@@ -514,6 +516,77 @@ def _fast_for(a, b, method):
     return fast
 
 
+class _MeshPair:
+    """The fast path of :func:`distance` between a mesh and a mesh or a posed mesh: the sides,
+    the compiled descent and its constant arguments, prepared once per pair of trees; a
+    call poses, runs the descent on one query and reads its answer, the same bits as the
+    general path (:func:`_collection_answer`), which finishes what it leaves undecided."""
+
+    def __init__(self, mesh_a, mesh_b, method, posed):
+        pc = _lazy.load("proximity._pair_collections")
+        bp = pc._broadphase()
+        self.a, depth_a, kinds_a, self.m_a = pc.side_of(mesh_a)
+        self.b, depth_b, kinds_b, self.m_b = pc.side_of(mesh_b)
+        self.depth = int(depth_a + depth_b)
+        present = bp.present_pairs(kinds_a, kinds_b, ("a", "b"))
+        self.descend = bp.descent_kernel(method, present, posed, -1, -1)  # faces have no radii
+        zero, none = np.zeros(1, np.int64), np.empty(0)
+        self.queries = bp.Queries(zero, zero, np.zeros(1), np.zeros(1), np.full(1, np.inf))
+        # The outputs a distance does not write, between signed, distance and undecided.
+        self.unused = (none, np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int8), np.empty(0, np.int8),
+                       np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int64), np.empty(0, np.int64),
+                       np.empty(0, np.int64), np.empty(0, np.int64), none, none)  # fmt: skip
+        self.outputs, self.magnitude = bp.Outputs, bp.magnitude
+        self.unposed = np.zeros((3, 4))
+
+    def run(self, pose):
+        """The distance, or None where the descent left it undecided."""
+        magnitude = float(self.magnitude(self.m_a, self.m_b, pose, 0.0))
+        pose_array = self.unposed if pose is None else pose
+        out = self.outputs(np.empty(1), np.empty(1), *self.unused, np.empty(1))
+        with _threads.kernel():
+            self.descend(0, 1, self.a, self.b, pose_array, self.depth, magnitude, self.queries, out, False)
+        if out.undecided[0] == out.undecided[0]:
+            return None
+        # As the general path's np.maximum(signed, 0.0) + 0.0 (the sum turns -0.0 into 0.0).
+        return np.float64(max(float(out.signed[0]), 0.0) + 0.0)
+
+
+_mesh_pairs = weakref.WeakKeyDictionary()  # tree of a -> {tree of b: {(method, posed): _MeshPair}}
+_last = (lambda: None, lambda: None, None, None)  # the last pair asked: (weak a, weak b, key, _MeshPair)
+
+
+def _mesh_pair(a, b, method):
+    """``(prepared fast path, 3 x 4 pose or None)`` of ``distance(a, b, method=method)``, or None
+    where ``a`` is not a :class:`~proximity.TriangleMesh` and ``b`` one or a posed one."""
+    from .mesh import TriangleMesh
+    from .posed import Posed
+
+    if type(a) is not TriangleMesh or method not in ("robust", "certified"):
+        return None
+    pose = None
+    if type(b) is Posed:
+        rotation, translation, b = b.rotation, b.translation, b.shape
+        pose = np.empty((3, 4))
+        pose[:, :3], pose[:, 3] = rotation, translation
+    if type(b) is not TriangleMesh:
+        return None
+    global _last
+    tree_a, tree_b, key = a._tree, b._tree, (method, pose is not None)
+    ref_a, ref_b, last_key, fast = _last
+    if ref_a() is tree_a and ref_b() is tree_b and last_key == key:
+        return fast, pose
+    prepared = _mesh_pairs.get(tree_a)
+    if prepared is None:
+        prepared = _mesh_pairs[tree_a] = weakref.WeakKeyDictionary()
+    prepared = prepared.setdefault(tree_b, {})
+    fast = prepared.get(key)
+    if fast is None:
+        fast = prepared[key] = _MeshPair(a, b, resolve(method), pose is not None)
+    _last = (weakref.ref(tree_a), weakref.ref(tree_b), key, fast)
+    return fast, pose
+
+
 def _instances(query, a, b, method, max_distance, pose_b, signed):
     """The pair where a side is a scene of instances, part by part
     (:mod:`proximity._pair_instances`); None where neither side is one."""
@@ -609,6 +682,11 @@ def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
         fast = _fast_for(a, b, method)
         if fast is not None:
             return fast.run(a, b)[1]
+        meshes = _mesh_pair(a, b, method)
+        if meshes is not None:
+            d = meshes[0].run(meshes[1])
+            if d is not None:
+                return d
     found = _instances(distance, a, b, method, max_distance, pose_b, True)
     if found is not None:
         return found

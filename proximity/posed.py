@@ -22,6 +22,7 @@ vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -66,6 +67,10 @@ def rigid(transform, name="transform"):
     ``[0, 0, 0, 1]``, a rotation not orthonormal within
     :data:`RIGID_TOLERANCE`, or a determinant that is not +1 (a reflection)."""
     m = as_float64(transform, name, "(4, 4)")
+    if m.shape == (4, 4):
+        one = _rigid_one(m)
+        if one is not None:
+            return one
     if m.ndim < 2 or m.shape[-2:] != (4, 4):
         raise ValueError(f"{name} must be a 4x4 matrix; got shape {m.shape}")
     if not np.isfinite(m).all():
@@ -82,6 +87,26 @@ def rigid(transform, name="transform"):
     if (np.linalg.det(r) < 0).any():
         raise ValueError(f"{name} must be rigid, a rotation: its determinant is -1 (a reflection)")
     return frozen(np.ascontiguousarray(r), new=True), frozen(np.ascontiguousarray(m[..., :3, 3]), new=True)
+
+
+def _rigid_one(m):
+    """``(R, t)`` of one 4x4 transform that is certainly rigid, by checks in Python floats
+    (faster than NumPy's on one matrix); None where a check fails or comes within half the
+    tolerance of failing, for :func:`rigid`'s checks and messages to decide."""
+    rows = m.tolist()
+    if rows[3] != [0.0, 0.0, 0.0, 1.0] or not all(map(math.isfinite, rows[0] + rows[1] + rows[2])):
+        return None
+    (a, b, c, x), (d, e, f, y), (g, h, i, z) = rows[0], rows[1], rows[2]
+    # max |R^T R - I|: the columns' dot products.
+    error = max(
+        abs(a * a + d * d + g * g - 1.0), abs(b * b + e * e + h * h - 1.0), abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h), abs(a * c + d * f + g * i), abs(b * c + e * f + h * i),
+    )  # fmt: skip
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    if not error <= 0.5 * RIGID_TOLERANCE or det < 0.5:
+        return None
+    r = np.array(rows[:3])[:, :3]
+    return frozen(np.ascontiguousarray(r), new=True), frozen(np.array([x, y, z]), new=True)
 
 
 class Posed(Frozen):

@@ -106,6 +106,25 @@ def test_bad_transforms_name_the_argument(T, match):
         proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).transformed(T)
 
 
+def test_rigid_accepts_rotations_within_the_tolerance_and_names_the_rest():
+    from proximity.posed import RIGID_TOLERANCE, rigid
+
+    turn = np.eye(4)
+    turn[:3, :3], turn[:3, 3] = _pose(3)[:3, :3], [1.0, -2.0, 3.0]
+    r, t = rigid(turn)
+    np.testing.assert_array_equal(r, turn[:3, :3])
+    np.testing.assert_array_equal(t, turn[:3, 3])
+    for stretch, ok in ((0.75, True), (1.5, False)):  # near the tolerance: decided as in batches
+        T = turn.copy()
+        T[:3, 0] *= 1.0 + stretch * RIGID_TOLERANCE / 2
+        if ok:
+            np.testing.assert_array_equal(rigid(T)[0], T[:3, :3])
+            np.testing.assert_array_equal(rigid(T[None])[0][0], T[:3, :3])
+        else:
+            with pytest.raises(ValueError, match="must be rigid"):
+                rigid(T)
+
+
 def test_instances_share_their_mesh_and_answer_as_the_meshes_built_moved():
     vertices, faces = icosphere(3)
     mesh = proximity.TriangleMesh(vertices, faces)

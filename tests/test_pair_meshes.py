@@ -275,6 +275,19 @@ def test_posed_views_are_searched_in_place(method):
 
 
 @pytest.mark.parametrize("method", ["robust", "certified"])
+def test_the_distance_between_meshes_takes_a_shorter_path_to_the_same_bits(method):
+    rng = np.random.default_rng(12)
+    sphere, torus = proximity.TriangleMesh(*SPHERE), proximity.TriangleMesh(*TORUS)
+    assert pair_queries._mesh_pair(sphere, torus, method) is not None
+    for gap in (0.5, 1e-3, -0.02):
+        pose = _pose(rng, gap)
+        for b in (torus, torus.transformed(pose)):
+            fast = proximity.distance(sphere, b, method=method)
+            general = proximity.distance(sphere, b, method=method, max_distance=np.inf)  # the general path
+            assert type(fast) is type(general) and fast.tobytes() == general.tobytes()
+
+
+@pytest.mark.parametrize("method", ["robust", "certified"])
 def test_a_mesh_against_itself_touches_everywhere(method):
     sphere = proximity.TriangleMesh(*SPHERE)
     r = proximity.closest_points(sphere, sphere, method=method)

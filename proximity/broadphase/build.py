@@ -530,10 +530,11 @@ def _renumber(faces, order, number, out):
 
 
 def leaf_faces(vertices, faces, order):
-    """``(vertices, faces)`` of the faces ``faces[order]`` (leaf order) of
-    ``vertices``, as a tree reads them (:attr:`.tree.Tree.faces`): the
-    vertices they use, in the order of first use, and each face's three
-    rows of them (int32), so that the faces of a leaf read nearby rows."""
+    """``(vertices, faces, sources)`` of the faces ``faces[order]`` (leaf order)
+    of ``vertices``, as a tree reads them (:attr:`.tree.Tree.faces`): the
+    vertices they use, in the order of first use, each face's three rows of
+    them (int32), so that the faces of a leaf read nearby rows, and the index
+    in ``vertices`` of each row (int32, :attr:`.tree.Tree.sources`)."""
     faces = readonly(faces, np.int64)
     number = np.full(len(vertices), -1, np.int64)
     out = np.empty((len(order), 3), np.int32)
@@ -542,7 +543,14 @@ def leaf_faces(vertices, faces, order):
     kept = np.flatnonzero(number >= 0)
     first[number[kept]] = kept
     out.flags.writeable = False
-    return readonly(take_rows(readonly(vertices, np.float64), first), np.float64), out
+    return readonly(take_rows(readonly(vertices, np.float64), first), np.float64), out, indices(first)
+
+
+def moved_faces(vertices, tree):
+    """:func:`leaf_faces` of a tree of faces read through their vertices, for
+    its faces over moved ``vertices``: the same rows, renumbered as before."""
+    rows = readonly(take_rows(readonly(vertices, np.float64), tree.sources), np.float64)
+    return rows, tree.faces[:, -3:], tree.sources
 
 
 def faces_reader(vertices, faces, index):
@@ -592,10 +600,10 @@ def assemble(
         loose = readonly(loose, np.float64)
         loose_ro = readonly(stored_cull(loose, empty), np.float32)
         loose_bounds = readonly(refit(child, count, kinds, params, loose, loose_ro), np.float64)
-    read = (None, None)
+    read = (None, None, None)
     if faces is not None:
         del params
-        vertices, corners = faces()
+        vertices, corners, sources = faces()
         params = None
         # Each face's vertex indices in its cull row, in the cache line the
         # search reads before it evaluates the face.
@@ -603,7 +611,7 @@ def assemble(
         wide[:, :FACE_INDEX] = tight_ro
         wide.view(np.int32)[:, FACE_INDEX:] = corners
         tight_ro = loose_ro = readonly(wide, np.float32)
-        read = (vertices, readonly(wide.view(np.int32), np.int32))
+        read = (vertices, readonly(wide.view(np.int32), np.int32), sources)
     return Tree(
         kinds=kinds,
         stored_params=params,
@@ -617,6 +625,7 @@ def assemble(
         depth=int(depth),
         vertices=read[0],
         faces=read[1],
+        sources=read[2],
     )
 
 

@@ -18,7 +18,7 @@ such sums bound a pair of nodes, the largest wins:
 * along the line between the two centres (one axis), which separates
   nodes far apart best.
 
-A node's oriented box is kept per node (:func:`frames`) as a
+A node's oriented box is kept per node (:func:`node_arrays`) as a
 parallelepiped ``{c + sum_j t_j h_j A_j : |t_j| <= 1}`` over its slabs'
 axes ``A_j``; where a slab is unbounded (a leaf of one primitive, whose
 only slab is its normal), the node's box stands in for it, over the
@@ -58,35 +58,41 @@ from .._jit import inline, kernel
 
 _VERTICES = primitives.vertex_counts()
 
-#: Columns of a node's frame: the parallelepiped's centre and half-widths,
-#: and whether it stands for the oriented box (1) or the box (0).
-FRAME_COLUMNS = 7
+#: Columns of a node's row in the table the descent reads (:func:`node_arrays`), 32 a
+#: node (four cache lines), so that a node's tests read one place: its box (low and
+#: high corners), its parallelepiped's centre, half-widths, own half-widths along its
+#: axes (the Gram terms, which turning the axes keeps) and axes (:func:`frame`), a
+#: point below it (:func:`upper`), and its ``child`` and ``count`` as
+#: :class:`~.tree.Tree` keeps them.
+CENTRE, HALF, OWN, AXES, REP, CHILD, COUNT = 6, 9, 12, 15, 24, 27, 28
+NODE_WIDTH = 32
 
 _cache = weakref.WeakKeyDictionary()
 
 
 def node_data(tree):
-    """``(frames, rep, magnitude, params)`` of a :class:`~.tree.Tree`: its nodes' frames and
-    points, the largest finite coordinate magnitude of its root box, and its rows
-    (:attr:`~.tree.Tree.params`, gathered once where the tree reads its faces
-    through their vertices), computed once per tree."""
+    """``(nodes, magnitude, params)`` of a :class:`~.tree.Tree`: its nodes' table, the largest
+    finite coordinate magnitude of its root box, and its rows (:attr:`~.tree.Tree.params`,
+    gathered once where the tree reads its faces through their vertices), computed once per
+    tree."""
     data = _cache.get(tree)
     if data is None:
         params = tree.params
-        frames, rep = node_arrays(tree.kinds, params, tree.bounds, tree.child, tree.count)
+        nodes = node_arrays(tree.kinds, params, tree.bounds, tree.child, tree.count)
         root = [abs(x) for x in tree.bounds[0, :6].tolist() if math.isfinite(x)]
-        data = _cache[tree] = (frames, rep, max(root, default=0.0), params)
+        data = _cache[tree] = (nodes, max(root, default=0.0), params)
     return data
 
 
 def node_arrays(kinds, params, bounds, child, count):
-    """``(frames, rep)`` of nodes ``bounds``, ``child``, ``count`` over stored rows ``params``."""
-    frames = np.empty((len(child), FRAME_COLUMNS))
-    rep = np.empty((len(child), 3))
-    _fill(kinds, params, bounds, child, count, _VERTICES, frames, rep)
-    frames.flags.writeable = False
-    rep.flags.writeable = False
-    return frames, rep
+    """The table of nodes ``bounds``, ``child``, ``count`` over stored rows ``params``."""
+    # Rows start on cache lines (64 bytes), so that each is four lines, not five.
+    flat = np.zeros(len(child) * NODE_WIDTH + 8)
+    skip = (-flat.ctypes.data % 64) // 8
+    nodes = flat[skip : skip + len(child) * NODE_WIDTH].reshape(len(child), NODE_WIDTH)
+    _fill(kinds, params, bounds, child, count, _VERTICES, nodes)
+    nodes.flags.writeable = False
+    return nodes
 
 
 @inline
@@ -103,29 +109,48 @@ def _slab(bounds, n, c0):
 
 
 @kernel()
-def _fill(kinds, params, bounds, child, count, vertices, frames, rep):
+def _fill(kinds, params, bounds, child, count, vertices, nodes):
     for n in range(child.shape[0]):
+        for c in range(6):
+            nodes[n, c] = bounds[n, c]
+        nodes[n, CHILD], nodes[n, COUNT] = child[n], count[n]
         x0, y0, z0, h0, ok0 = _slab(bounds, n, 6)
         x1, y1, z1, h1, ok1 = _slab(bounds, n, 11)
         x2, y2, z2, h2, ok2 = _slab(bounds, n, 16)
         if ok0 and ok1 and ok2:
-            frames[n, 0], frames[n, 1], frames[n, 2] = x0 + x1 + x2, y0 + y1 + y2, z0 + z1 + z2
-            frames[n, 3], frames[n, 4], frames[n, 5], frames[n, 6] = h0, h1, h2, 1.0
+            nodes[n, CENTRE], nodes[n, CENTRE + 1] = x0 + x1 + x2, y0 + y1 + y2
+            nodes[n, CENTRE + 2] = z0 + z1 + z2
+            nodes[n, HALF], nodes[n, HALF + 1], nodes[n, HALF + 2] = h0, h1, h2
+            for j in range(3):
+                for c in range(3):
+                    nodes[n, AXES + 3 * j + c] = bounds[n, 6 + 5 * j + c]
+            a0 = (bounds[n, 6], bounds[n, 7], bounds[n, 8])
+            a1 = (bounds[n, 11], bounds[n, 12], bounds[n, 13])
+            a2 = (bounds[n, 16], bounds[n, 17], bounds[n, 18])
+            # The projection of the parallelepiped on each of its axes (Gram terms), widened
+            # by 2^-30 so that the rounding of posed axes' dot products stays within it.
+            g01, g02, g12 = abs(_dot(a0, a1)), abs(_dot(a0, a2)), abs(_dot(a1, a2))
+            widen = 1.0 + 2.0**-30
+            nodes[n, OWN] = (_dot(a0, a0) * h0 + g01 * h1 + g02 * h2) * widen
+            nodes[n, OWN + 1] = (g01 * h0 + _dot(a1, a1) * h1 + g12 * h2) * widen
+            nodes[n, OWN + 2] = (g02 * h0 + g12 * h1 + _dot(a2, a2) * h2) * widen
         else:
+            # The box itself, over the coordinate axes.
             for a in range(3):
-                frames[n, a] = bounds[n, a] * 0.5 + bounds[n, 3 + a] * 0.5
-                frames[n, 3 + a] = bounds[n, 3 + a] * 0.5 - bounds[n, a] * 0.5
-            frames[n, 6] = 0.0
+                nodes[n, CENTRE + a] = bounds[n, a] * 0.5 + bounds[n, 3 + a] * 0.5
+                nodes[n, HALF + a] = bounds[n, 3 + a] * 0.5 - bounds[n, a] * 0.5
+                nodes[n, OWN + a] = nodes[n, HALF + a]
+                nodes[n, AXES + 4 * a] = 1.0
     # Children come after their parents: backwards, a node's first child is done.
     for n in range(child.shape[0] - 1, -1, -1):
         if count[n] > 0:
             k = child[n]
             ok = vertices[kinds[k]] > 0
             for c in range(3):
-                rep[n, c] = params[k, c] if ok else math.nan
+                nodes[n, REP + c] = params[k, c] if ok else math.nan
         else:
             for c in range(3):
-                rep[n, c] = rep[child[n], c]
+                nodes[n, REP + c] = nodes[child[n], REP + c]
 
 
 # -- nodes ----------------------------------------------------------------------------
@@ -198,29 +223,21 @@ def _dot(u, v):
 
 
 @inline
-def frame(bounds, frames, n, pose, s, is_posed):
+def frame(nodes, n, pose, s, is_posed):
     """Node ``n``'s parallelepiped, scaled and posed where ``is_posed``:
     ``(c, (A0, A1, A2), h, (r0, r1, r2))`` with ``r_j`` its own half-width along ``A_j``."""
-    c = (frames[n, 0], frames[n, 1], frames[n, 2])
-    h = (frames[n, 3] * s, frames[n, 4] * s, frames[n, 5] * s)
-    if frames[n, 6] != 0.0:
-        a0 = (bounds[n, 6], bounds[n, 7], bounds[n, 8])
-        a1 = (bounds[n, 11], bounds[n, 12], bounds[n, 13])
-        a2 = (bounds[n, 16], bounds[n, 17], bounds[n, 18])
-    else:
-        a0, a1, a2 = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+    c = (nodes[n, CENTRE], nodes[n, CENTRE + 1], nodes[n, CENTRE + 2])
+    h = (nodes[n, HALF] * s, nodes[n, HALF + 1] * s, nodes[n, HALF + 2] * s)
+    a0 = (nodes[n, AXES], nodes[n, AXES + 1], nodes[n, AXES + 2])
+    a1 = (nodes[n, AXES + 3], nodes[n, AXES + 4], nodes[n, AXES + 5])
+    a2 = (nodes[n, AXES + 6], nodes[n, AXES + 7], nodes[n, AXES + 8])
     if is_posed:
         c = posed(pose, c[0], c[1], c[2])
         a0 = _turned(pose, a0[0], a0[1], a0[2])
         a1 = _turned(pose, a1[0], a1[1], a1[2])
         a2 = _turned(pose, a2[0], a2[1], a2[2])
     c = (c[0] * s, c[1] * s, c[2] * s)
-    # Its own extent along each axis: the projection of the parallelepiped (Gram terms).
-    g01, g02, g12 = abs(_dot(a0, a1)), abs(_dot(a0, a2)), abs(_dot(a1, a2))
-    r0 = _dot(a0, a0) * h[0] + g01 * h[1] + g02 * h[2]
-    r1 = g01 * h[0] + _dot(a1, a1) * h[1] + g12 * h[2]
-    r2 = g02 * h[0] + g12 * h[1] + _dot(a2, a2) * h[2]
-    return c, (a0, a1, a2), h, (r0, r1, r2)
+    return c, (a0, a1, a2), h, (nodes[n, OWN] * s, nodes[n, OWN + 1] * s, nodes[n, OWN + 2] * s)
 
 
 @inline
@@ -274,11 +291,11 @@ def lb2(fa, box_a, fb, box_b, limit):
 
 
 @inline
-def node_lb2(bounds_a, frames_a, na, bounds_b, frames_b, nb, pose, s, is_posed):
+def node_lb2(nodes_a, na, nodes_b, nb, pose, s, is_posed):
     """Squared lower bound (scaled) on the distance between nodes ``na`` and ``nb``."""
-    fa = frame(bounds_a, frames_a, na, pose, s, False)
-    fb = frame(bounds_b, frames_b, nb, pose, s, is_posed)
-    return lb2(fa, plain_box(bounds_a, na, s), fb, posed_box(bounds_b, nb, pose, s, is_posed), math.inf)
+    fa = frame(nodes_a, na, pose, s, False)
+    fb = frame(nodes_b, nb, pose, s, is_posed)
+    return lb2(fa, plain_box(nodes_a, na, s), fb, posed_box(nodes_b, nb, pose, s, is_posed), math.inf)
 
 
 @inline
@@ -289,14 +306,28 @@ def size(bounds, n):
 
 
 @inline
-def upper(rep_a, na, rep_b, nb, pose, s, is_posed):
+def upper(nodes_a, na, nodes_b, nb, pose, s, is_posed):
     """The distance (scaled) between the points ``rep`` of nodes ``na`` and ``nb`` (b posed):
     an upper bound on the distance between what they hold; NaN where a side has none."""
-    x, y, z = rep_b[nb, 0], rep_b[nb, 1], rep_b[nb, 2]
+    x, y, z = nodes_b[nb, REP], nodes_b[nb, REP + 1], nodes_b[nb, REP + 2]
     if is_posed:
         x, y, z = posed(pose, x, y, z)
-    dx, dy, dz = rep_a[na, 0] * s - x * s, rep_a[na, 1] * s - y * s, rep_a[na, 2] * s - z * s
+    dx = nodes_a[na, REP] * s - x * s
+    dy = nodes_a[na, REP + 1] * s - y * s
+    dz = nodes_a[na, REP + 2] * s - z * s
     return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@inline
+def first(nodes, n):
+    """Node ``n``'s first child, or first stored primitive where it is a leaf."""
+    return np.int64(nodes[n, CHILD])
+
+
+@inline
+def held(nodes, n):
+    """How many stored primitives node ``n`` holds: 0 where it has children."""
+    return np.int64(nodes[n, COUNT])
 
 
 # -- primitives -------------------------------------------------------------------------

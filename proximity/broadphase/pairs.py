@@ -64,11 +64,13 @@ from numba.core import types
 
 from .. import certified, pairs, primitives
 from .._fp import EPS, faithful_difference, two_sum
-from .._jit import inline, kernel, specialize
+from .._jit import inline, kernel, part, specialize
 from .bounds import _scale
 from .pair_bounds import (  # noqa: F401  (node_data: for the driver)
     box_gap2,
     centre_gap,
+    first,
+    held,
     hull_gap,
     lb2,
     node_arrays,
@@ -87,10 +89,10 @@ from .traverse import _SENTINEL
 #: Pruning slack, in units of ``M`` (see the module docstring).
 SLACK = 256.0 * EPS
 
-#: One side of a descent: primitives in leaf order, their cull rows, the
-#: nodes (:class:`~.tree.Tree`'s arrays of the same names).
-#: ``frames`` and ``rep`` are :func:`.pair_bounds.node_data`'s.
-PairTree = collections.namedtuple("PairTree", "kinds params index cull bounds child count frames rep")
+#: One side of a descent: primitives in leaf order and their cull rows
+#: (:class:`~.tree.Tree`'s arrays of the same names), and the table of its
+#: nodes (:func:`.pair_bounds.node_arrays`).
+PairTree = collections.namedtuple("PairTree", "kinds params index cull nodes")
 #: Per query: the starting nodes, the radii of the sides' rounded shapes
 #: (added to every row's own), and the cutoff (``max_distance``, or inf).
 Queries = collections.namedtuple("Queries", "start_a start_b radius_a radius_b cutoff")
@@ -141,9 +143,9 @@ def _array(dtype, ndim, readonly=True):
 _F1, _F2, _I1 = _array(types.float64, 1), _array(types.float64, 2), _array(types.int64, 1)
 # The cull rows as trees keep them, in float32 (see proximity.broadphase.bounds.stored_cull).
 _C2 = _array(types.float32, 2)
-# A tree's index, child and count (proximity.broadphase._alloc.INDEX).
+# A tree's index (proximity.broadphase._alloc.INDEX).
 _N1 = _array(types.int32, 1)
-_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _N1, _C2, _F2, _N1, _N1, _F2, _F2], PairTree)
+_TREE = types.NamedTuple([_array(types.int8, 1), _F2, _N1, _C2, _F2], PairTree)
 _QUERIES = types.NamedTuple([_I1, _I1, _F1, _F1, _F1], Queries)
 _W1, _W2 = _array(types.float64, 1, False), _array(types.float64, 2, False)
 _WI, _W8 = _array(types.int64, 1, False), _array(types.int8, 1, False)
@@ -257,12 +259,9 @@ def _reach(fs, cutoff, rout, s):
 
 @inline
 def _push(h_lb, h_a, h_b, n, lb, a, b):
-    """Push ``(lb, a, b)`` on the binary min-heap of ``n`` entries (grown where full):
-    returns the heap's arrays and its new size."""
-    if n == h_lb.shape[0]:
-        grown_lb, grown_a, grown_b = np.empty(2 * n), np.empty(2 * n, np.int64), np.empty(2 * n, np.int64)
-        grown_lb[:n], grown_a[:n], grown_b[:n] = h_lb, h_a, h_b
-        h_lb, h_a, h_b = grown_lb, grown_a, grown_b
+    """Push ``(lb, a, b)`` on the binary min-heap of ``n`` entries, which has room for it
+    (:func:`_room`): returns its new size.  Nothing returns the arrays, whose references
+    would be counted on every push."""
     i = n
     while i > 0:
         parent = (i - 1) >> 1
@@ -271,7 +270,15 @@ def _push(h_lb, h_a, h_b, n, lb, a, b):
         h_lb[i], h_a[i], h_b[i] = h_lb[parent], h_a[parent], h_b[parent]
         i = parent
     h_lb[i], h_a[i], h_b[i] = lb, a, b
-    return h_lb, h_a, h_b, n + 1
+    return n + 1
+
+
+@part
+def _room(h_lb, h_a, h_b, n):
+    """The heap's arrays, twice as long, with its ``n`` entries."""
+    grown_lb, grown_a, grown_b = np.empty(2 * n), np.empty(2 * n, np.int64), np.empty(2 * n, np.int64)
+    grown_lb[:n], grown_a[:n], grown_b[:n] = h_lb[:n], h_a[:n], h_b[:n]
+    return grown_lb, grown_a, grown_b
 
 
 @inline
@@ -297,8 +304,8 @@ def _pop(h_lb, h_a, h_b, n):
 
 
 def _one(q, A, B, pose, depth, magnitude, queries, out, full):
-    kinds_a, qa, index_a, cull_a, bounds_a, child_a, count_a, frames_a, rep_a = A
-    kinds_b, qb, index_b, cull_b, bounds_b, child_b, count_b, frames_b, rep_b = B
+    kinds_a, qa, index_a, cull_a, nodes_a = A
+    kinds_b, qb, index_b, cull_b, nodes_b = B
     s = _scale(0.0, 0.0, 0.0, magnitude)
     tb = np.empty((1, qb.shape[1]))
     # Node pairs to visit, least lower bound first.
@@ -319,33 +326,47 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
     reach = _reach(fs, cutoff, rout, s)
     limit = reach * reach
     na, nb = queries.start_a[q], queries.start_b[q]
-    lb0 = node_lb2(bounds_a, frames_a, na, bounds_b, frames_b, nb, pose, s, POSED)
+    lb0 = node_lb2(nodes_a, na, nodes_b, nb, pose, s, POSED)
     if lb0 <= limit:
-        h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, lb0, na, nb)
+        n_heap = _push(h_lb, h_a, h_b, n_heap, lb0, na, nb)
+    # The nearer child of the pair just split, taken next without the heap where nothing
+    # in the heap is nearer (half the heap's traffic).
+    pending, p_lb, p_a, p_b = False, 0.0, 0, 0
     while True:
-        if n_heap == 0 or h_lb[0] > limit:
-            if n_cand == 0:
-                break
-            # Candidates wait: their answers may prune what is left.
-            _flush(z, n_cand, cand, cand_r, q, A, B, queries, magnitude, fs, ist, win, fin, fin_lo, tb,
-                   POSED, pose)  # fmt: skip
-            n_cand = 0
-            reach = _reach(fs, cutoff, rout, s)
-            limit = reach * reach
-            if ist[5] & 1:
-                break
-            continue
-        na, nb = _pop(h_lb, h_a, h_b, n_heap)
-        n_heap -= 1
-        leaf_a, leaf_b = count_a[na] > 0, count_b[nb] > 0
+        if pending and p_lb <= limit and (n_heap == 0 or p_lb <= h_lb[0]):
+            pending = False
+            na, nb = p_a, p_b
+        else:
+            if pending:
+                pending = False
+                if p_lb <= limit:
+                    if n_heap == h_lb.shape[0]:
+                        h_lb, h_a, h_b = _room(h_lb, h_a, h_b, n_heap)
+                    n_heap = _push(h_lb, h_a, h_b, n_heap, p_lb, p_a, p_b)
+                continue
+            if n_heap == 0 or h_lb[0] > limit:
+                if n_cand == 0:
+                    break
+                # Candidates wait: their answers may prune what is left.
+                _flush(z, n_cand, cand, cand_r, q, A, B, queries, magnitude, fs, ist, win, fin, fin_lo, tb,
+                       POSED, pose)  # fmt: skip
+                n_cand = 0
+                reach = _reach(fs, cutoff, rout, s)
+                limit = reach * reach
+                if ist[5] & 1:
+                    break
+                continue
+            na, nb = _pop(h_lb, h_a, h_b, n_heap)
+            n_heap -= 1
+        leaf_a, leaf_b = held(nodes_a, na) > 0, held(nodes_b, nb) > 0
         if leaf_a and leaf_b:
-            for kb in range(child_b[nb], child_b[nb] + count_b[nb]):
+            for kb in range(first(nodes_b, nb), first(nodes_b, nb) + held(nodes_b, nb)):
                 kind_b = kinds_b[kb]
                 nv_b = _VERTICES[kind_b]
                 pose_row(qb, kb, kind_b, pose, tb, POSED)
                 row_rb = qb[kb, RADIUS_B] if RADIUS_B >= 0 else 0.0
                 box_b = row_box(tb, 0, nv_b, cull_b, kb, row_rb, s)
-                for ka in range(child_a[na], child_a[na] + count_a[na]):
+                for ka in range(first(nodes_a, na), first(nodes_a, na) + held(nodes_a, na)):
                     kind_a = kinds_a[ka]
                     if box_gap2(plain_box(cull_a, ka, s), box_b) > limit:
                         continue
@@ -387,47 +408,53 @@ def _one(q, A, B, pose, depth, magnitude, queries, out, full):
                 reach = _reach(fs, cutoff, rout, s)
                 limit = reach * reach
         else:
-            split_a = leaf_b or (not leaf_a and size(bounds_a, na) >= size(bounds_b, nb))
+            split_a = leaf_b or (not leaf_a and size(nodes_a, na) >= size(nodes_b, nb))
             # The frame of the node kept is computed once for both children.
             if split_a:
-                c1, c2 = np.int64(child_a[na]), child_a[na] + 1
-                fb = node_frame(bounds_b, frames_b, nb, pose, s, POSED)
-                box_b = posed_box(bounds_b, nb, pose, s, POSED)
-                box_1, box_2 = plain_box(bounds_a, c1, s), plain_box(bounds_a, c2, s)
+                c1 = first(nodes_a, na)
+                c2 = c1 + 1
+                fb = node_frame(nodes_b, nb, pose, s, POSED)
+                box_b = posed_box(nodes_b, nb, pose, s, POSED)
+                box_1, box_2 = plain_box(nodes_a, c1, s), plain_box(nodes_a, c2, s)
                 # The boxes first: the frames only where they do not prune.
                 d1, d2 = box_gap2(box_1, box_b), box_gap2(box_2, box_b)
                 if d1 <= limit:
-                    d1 = lb2(node_frame(bounds_a, frames_a, c1, pose, s, False), box_1, fb, box_b, limit)
+                    d1 = lb2(node_frame(nodes_a, c1, pose, s, False), box_1, fb, box_b, limit)
                 if d2 <= limit:
-                    d2 = lb2(node_frame(bounds_a, frames_a, c2, pose, s, False), box_2, fb, box_b, limit)
+                    d2 = lb2(node_frame(nodes_a, c2, pose, s, False), box_2, fb, box_b, limit)
                 o1, o2 = nb, nb
             else:
-                o1, o2 = np.int64(child_b[nb]), child_b[nb] + 1
-                fa = node_frame(bounds_a, frames_a, na, pose, s, False)
-                box_a = plain_box(bounds_a, na, s)
+                o1 = first(nodes_b, nb)
+                o2 = o1 + 1
+                fa = node_frame(nodes_a, na, pose, s, False)
+                box_a = plain_box(nodes_a, na, s)
                 box_1, box_2 = (
-                    posed_box(bounds_b, o1, pose, s, POSED),
-                    posed_box(bounds_b, o2, pose, s, POSED),
+                    posed_box(nodes_b, o1, pose, s, POSED),
+                    posed_box(nodes_b, o2, pose, s, POSED),
                 )
                 d1, d2 = box_gap2(box_a, box_1), box_gap2(box_a, box_2)
                 if d1 <= limit:
-                    d1 = lb2(fa, box_a, node_frame(bounds_b, frames_b, o1, pose, s, POSED), box_1, limit)
+                    d1 = lb2(fa, box_a, node_frame(nodes_b, o1, pose, s, POSED), box_1, limit)
                 if d2 <= limit:
-                    d2 = lb2(fa, box_a, node_frame(bounds_b, frames_b, o2, pose, s, POSED), box_2, limit)
+                    d2 = lb2(fa, box_a, node_frame(nodes_b, o2, pose, s, POSED), box_2, limit)
                 c1, c2 = na, na
             if UPPER:
                 # Two points of the sides bound the answer from above, from the first levels on.
-                u1 = upper(rep_a, c1, rep_b, o1, pose, s, POSED)
-                u2 = upper(rep_a, c2, rep_b, o2, pose, s, POSED)
+                u1 = upper(nodes_a, c1, nodes_b, o1, pose, s, POSED)
+                u2 = upper(nodes_a, c2, nodes_b, o2, pose, s, POSED)
                 u = min(u1, u2) / s - rout
                 if u < fs[4]:
                     fs[4] = u
                     reach = _reach(fs, cutoff, rout, s)
                     limit = reach * reach
+            if d2 < d1:
+                d1, c1, o1, d2, c2, o2 = d2, c2, o2, d1, c1, o1
             if d1 <= limit:
-                h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, d1, c1, o1)
+                pending, p_lb, p_a, p_b = True, d1, c1, o1
             if d2 <= limit:
-                h_lb, h_a, h_b, n_heap = _push(h_lb, h_a, h_b, n_heap, d2, c2, o2)
+                if n_heap == h_lb.shape[0]:
+                    h_lb, h_a, h_b = _room(h_lb, h_a, h_b, n_heap)
+                n_heap = _push(h_lb, h_a, h_b, n_heap, d2, c2, o2)
         if ist[5] & 1:
             break
     undecided = math.nan
@@ -577,9 +604,8 @@ def descent_kernel(method, present, posed, radius_a, radius_b):
 
 def from_tree(tree):
     """The :class:`PairTree` of a collection's :class:`~.tree.Tree` (tight boxes)."""
-    frames, rep, _, params = node_data(tree)
-    t = tree
-    return PairTree(t.kinds, params, t.index, t.cull, t.bounds, t.child, t.count, frames, rep)
+    nodes, _, params = node_data(tree)
+    return PairTree(tree.kinds, params, tree.index, tree.cull, nodes)
 
 
 def forest(kinds, params):
@@ -598,9 +624,9 @@ def forest(kinds, params):
     kinds, params = readonly(kinds, np.int8), readonly(params, np.float64)
     index, bounds = indices(np.arange(n)), readonly(bounds, np.float64)
     child, count = indices(np.arange(n)), indices(np.ones(n, np.int64))
-    frames, rep = node_arrays(kinds, params, bounds, child, count)
+    nodes = node_arrays(kinds, params, bounds, child, count)
     stored = readonly(stored_cull(cull), np.float32)
-    return PairTree(kinds, params, index, stored, bounds, child, count, frames, rep)
+    return PairTree(kinds, params, index, stored, nodes)
 
 
 @functools.cache
@@ -622,7 +648,7 @@ def magnitude(m_a, m_b, pose, radius):
 
 def side_magnitude(side):
     """The largest finite coordinate magnitude of a forest's boxes."""
-    rows = side.bounds[:, :6]
+    rows = side.nodes[:, :6]
     return float(np.max(np.abs(rows), where=np.isfinite(rows), initial=0.0))
 
 
@@ -631,8 +657,8 @@ def _gather(A, B, pose, posed, depth, magnitude, start_a, start_b, reach_distanc
     """The pairs of stored primitives below nodes ``start_a``, ``start_b`` not pruned at
     ``reach_distance`` (the bound on ``d - r`` plus the outer radii) by the search's tests:
     written to ``out`` (as many as fit); returns how many there are."""
-    kinds_a, qa, index_a, cull_a, bounds_a, child_a, count_a, frames_a, rep_a = A
-    kinds_b, qb, index_b, cull_b, bounds_b, child_b, count_b, frames_b, rep_b = B
+    kinds_a, qa, index_a, cull_a, nodes_a = A
+    kinds_b, qb, index_b, cull_b, nodes_b = B
     s = _scale(0.0, 0.0, 0.0, magnitude)
     reach = max(reach_distance * s, 0.0) + SLACK
     limit = reach * reach
@@ -645,16 +671,16 @@ def _gather(A, B, pose, posed, depth, magnitude, start_a, start_b, reach_distanc
     while sp > 0:
         sp -= 1
         na, nb = stack_a[sp], stack_b[sp]
-        if node_lb2(bounds_a, frames_a, na, bounds_b, frames_b, nb, pose, s, posed) > limit:
+        if node_lb2(nodes_a, na, nodes_b, nb, pose, s, posed) > limit:
             continue
-        leaf_a, leaf_b = count_a[na] > 0, count_b[nb] > 0
+        leaf_a, leaf_b = held(nodes_a, na) > 0, held(nodes_b, nb) > 0
         if leaf_a and leaf_b:
-            for kb in range(child_b[nb], child_b[nb] + count_b[nb]):
+            for kb in range(first(nodes_b, nb), first(nodes_b, nb) + held(nodes_b, nb)):
                 nv_b = _VERTICES[kinds_b[kb]]
                 pose_row(qb, kb, kinds_b[kb], pose, tb, posed)
                 row_rb = qb[kb, col_b] if col_b >= 0 else 0.0
                 box_b = row_box(tb, 0, nv_b, cull_b, kb, row_rb, s)
-                for ka in range(child_a[na], child_a[na] + count_a[na]):
+                for ka in range(first(nodes_a, na), first(nodes_a, na) + held(nodes_a, na)):
                     if box_gap2(plain_box(cull_a, ka, s), box_b) > limit:
                         continue
                     if hull_gap(cull_a, ka, tb, 0, nv_b, row_rb, s) > reach:
@@ -667,13 +693,13 @@ def _gather(A, B, pose, posed, depth, magnitude, start_a, start_b, reach_distanc
                     if found < out.shape[0]:
                         out[found, 0], out[found, 1] = ka, kb
                     found += 1
-        elif leaf_b or (not leaf_a and size(bounds_a, na) >= size(bounds_b, nb)):
-            stack_a[sp], stack_b[sp] = child_a[na], nb
-            stack_a[sp + 1], stack_b[sp + 1] = child_a[na] + 1, nb
+        elif leaf_b or (not leaf_a and size(nodes_a, na) >= size(nodes_b, nb)):
+            stack_a[sp], stack_b[sp] = first(nodes_a, na), nb
+            stack_a[sp + 1], stack_b[sp + 1] = first(nodes_a, na) + 1, nb
             sp += 2
         else:
-            stack_a[sp], stack_b[sp] = na, child_b[nb]
-            stack_a[sp + 1], stack_b[sp + 1] = na, child_b[nb] + 1
+            stack_a[sp], stack_b[sp] = na, first(nodes_b, nb)
+            stack_a[sp + 1], stack_b[sp + 1] = na, first(nodes_b, nb) + 1
             sp += 2
     return found
 

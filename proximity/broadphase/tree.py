@@ -46,6 +46,10 @@ class Tree:
         stored face's three rows of ``vertices``: the search reads a face's
         coordinates through them (:meth:`rows`), 12 bytes a face and about
         12 of vertices where the faces' rows take 72.
+    sources : ndarray of int32, shape ``(V,)``, or None
+        The index of each row of ``vertices`` in the mesh's vertices: a refit
+        (:meth:`proximity.TriangleMesh.with_vertices`) reads the moved ones
+        in the same order.
     """
 
     kinds: np.ndarray
@@ -60,6 +64,7 @@ class Tree:
     depth: int
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
+    sources: np.ndarray | None = None
 
     @property
     def indexed(self):

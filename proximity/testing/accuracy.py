@@ -6,6 +6,7 @@ shape of a family's scene, its exact answers, and the errors in units of
 benchmark's accuracy batches, which the tests check query for query.
 """
 
+import mpmath
 import numpy as np
 
 import proximity
@@ -49,3 +50,30 @@ def ulp_errors(distances, ref):
     exact zero is 0 ulps (see :func:`proximity.testing.exact.ulps`).
     """
     return np.array([exact.ulps(float(d), d_exact) for d, (d_exact, _) in zip(distances, ref, strict=True)])
+
+
+#: The exact closest points of each pair of shapes, by the name of the pair (a key of ``scenes.PAIRS``).
+_PAIR_CLOSEST = {
+    "segment_segment": exact.segment_segment_closest,
+    "segment_triangle": exact.segment_triangle_closest,
+    "triangle_triangle": exact.triangle_triangle_closest,
+}
+
+
+def pair_shapes(pair, scene):
+    """The proximity shapes ``(a, b)`` of a pair scene (``pair`` a key of ``scenes.PAIRS``)."""
+    first, second = pair.split("_")
+    kinds = {"segment": proximity.Segment, "triangle": proximity.Triangle}
+    return kinds[first](scene.a), kinds[second](scene.b)
+
+
+def pair_reference(pair, scene):
+    """Exact distances (mpmath numbers) and sizes ``S`` (the largest coordinate difference between
+    the two shapes' vertices, the unit of the pair queries' bound) of a pair scene's queries."""
+    closest = _PAIR_CLOSEST[pair]
+    out = []
+    for a, b in zip(scene.a, scene.b, strict=True):
+        with mpmath.workprec(exact.PREC):
+            d = mpmath.sqrt(exact.to_mpf(closest(a, b).sqr_distance))
+        out.append((d, exact.pair_scale(a, b)))
+    return out
