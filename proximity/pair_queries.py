@@ -566,9 +566,7 @@ def _mesh_pair(a, b, method):
         return None
     pose = None
     if type(b) is Posed:
-        rotation, translation, b = b.rotation, b.translation, b.shape
-        pose = np.empty((3, 4))
-        pose[:, :3], pose[:, 3] = rotation, translation
+        pose, b = _pose_of(b.rotation, b.translation)[:3], b.shape  # as _poses and _pose_array give it
     if type(b) is not TriangleMesh:
         return None
     global _last

@@ -178,6 +178,16 @@ def _descend(lo, hi, A, B, pose, depth, magnitude, queries, out, full):
         _one(q, A, B, pose, depth, magnitude, queries, out, full)
 
 
+@inline
+def _win(fs, ist, win, answer, e, ra, rb, ia, ib, ka, kb):
+    """Stored pair ``ka``, ``kb`` (the caller's ``ia``, ``ib``) the winner so far: ``e`` its
+    ``d - r``, ``ra``, ``rb`` its radii, ``answer`` its 17 values (see :func:`_consider`)."""
+    fs[0], fs[2], fs[3] = e, ra, rb
+    ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
+    for k in range(17):
+        win[k] = answer[k]
+
+
 def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, win, fin, fin_lo, tb):
     """Take the robust answer ``r`` (17 values) of stored pair ``ka``, ``kb`` into the state:
     ``fs = [best, best_hi, radius_a, radius_b]``, ``ist = [index_a, index_b, row_a, row_b,
@@ -195,17 +205,11 @@ def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, w
                 # distance is exactly 0 and the search ends (see the module docstring).
                 c = TOUCHING(A.kinds[ka], A.params, ka, B.kinds[kb], tb, 0, r[9], r[10])
                 if c[0] == certified.CERTAIN and c[1] == 0.0:
-                    fs[0], fs[2], fs[3] = 0.0, ra, rb
-                    ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
-                    for k in range(17):
-                        win[k] = c[k]
+                    _win(fs, ist, win, c, 0.0, ra, rb, ia, ib, ka, kb)
                     ist[5] |= 1
                     return
         if e < fs[0] or (e == fs[0] and (ia < ist[0] or (ia == ist[0] and ib < ist[1]))):
-            fs[0], fs[2], fs[3] = e, ra, rb
-            ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
-            for c in range(17):
-                win[c] = r[c]
+            _win(fs, ist, win, r, e, ra, rb, ia, ib, ka, kb)
             if ZERO_STOPS and r[1] == 0.0:
                 ist[5] |= 1
         return
@@ -216,10 +220,8 @@ def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, w
             # Possibly touching: certified now, and a certain 0 ends the search.
             c = CERTIFY(A.kinds[ka], A.params, ka, B.kinds[kb], tb, 0)
             if c[0] == certified.CERTAIN and c[1] == 0.0:
-                fs[0], fs[1], fs[2], fs[3] = 0.0, 0.0, ra, rb
-                ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
-                for k in range(17):
-                    win[k] = c[k]
+                fs[1] = 0.0
+                _win(fs, ist, win, c, 0.0, ra, rb, ia, ib, ka, kb)
                 ist[5] |= 1
                 return
         n = ist[4]
