@@ -81,8 +81,7 @@ def _broad_phase():
     # Enough faces for a tree of more than one leaf, which the refit fits.
     vertices = readonly(params[:, :3], np.float64)
     faces = readonly([[k, (k + 1) % 8, (k + 3) % 8] for k in range(8)], np.int64)
-    built = build.build_faces(vertices, faces, 0)
-    refit.refit_faces(vertices, faces, built.index, built.child, built.count, built.kinds)
+    refit.refit_indexed(vertices, build.build_faces(vertices, faces, 0))
     # And a tree of one leaf, whose rows are gathered alone.
     built = build.build_faces(vertices, faces[:2], 0)
     refit.refit_faces(vertices, faces[:2], built.index, built.child, built.count, built.kinds)

@@ -692,22 +692,24 @@ class TriangleMesh(Collection):
             raise ValueError(f"vertices must have shape {expected}, the mesh's; got shape {v.shape}")
         require_finite(v, "vertices")
         tree = self._tree
-        # A build leaves out exact copies of a face; moved, they may no longer be
-        # copies, so such a mesh is built again.
-        if len(tree.index) != len(self.faces):
+        # A build leaves out exact copies of a face; moved, they may no longer
+        # be copies, so such a mesh is built again, as is a tree that keeps
+        # its faces' rows (one whose faces' hashes collided at the build).
+        if len(tree.index) != len(self.faces) or (len(tree.child) > 1 and not tree.indexed):
             return TriangleMesh(v, self.faces, broad_phase=self.broad_phase)
-        # The moved faces' rows in leaf order and their bounds; the nodes refitted.
         with _threads.kernel():
             broadphase = _lazy.load("proximity.broadphase")
-            params, cull, bounds = broadphase.refit_faces(
-                v, self.faces, tree.index, tree.child, tree.count, tree.kinds
-            )
-            # The float32 rows it keeps on recycled memory too, as the refit's.
-            read = (lambda: broadphase.build.moved_faces(v, tree)) if tree.indexed else None
-            moved = broadphase.assemble(
-                tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
-                empty=_pool.empty, faces=read,
-            )  # fmt: skip
+            if len(tree.child) > 1:
+                moved = broadphase.refit_indexed(v, tree)
+            else:
+                params, cull, bounds = broadphase.refit_faces(
+                    v, self.faces, tree.index, tree.child, tree.count, tree.kinds
+                )
+                read = (lambda: broadphase.build.moved_faces(v, tree)) if tree.indexed else None
+                moved = broadphase.assemble(
+                    tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
+                    empty=_pool.empty, faces=read,
+                )  # fmt: skip
         mesh = object.__new__(TriangleMesh)
         mesh._init(
             vertices=v,

@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 
 import proximity
+from proximity import broadphase
+from proximity.broadphase.refit import REFIT_SUBTREE
 from proximity.posed import to_local
 from proximity.results import asdict
 from proximity.testing import exact, examples
@@ -206,15 +208,37 @@ def test_a_refitted_mesh_answers_as_one_built_afresh_bit_for_bit(shape):
         mesh.with_vertices(np.where(np.arange(len(moved))[:, None] == 3, np.nan, moved))
 
 
-@pytest.mark.parametrize("scale", [1.0, 1e-30, 1e30])
-@pytest.mark.parametrize("kind", ["sphere", "soup"])
+def test_a_mesh_whose_tree_keeps_its_faces_rows_is_built_again(monkeypatch):
+    # Faces whose hashes collide at the build are sorted out by the general
+    # build, whose tree keeps the faces' rows; a refit of such a tree builds
+    # the moved mesh afresh.
+    monkeypatch.setattr(broadphase.build, "_all_different", lambda hashes: False)
+    vertices, faces = torus(20, 10)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    assert not mesh._tree.indexed and len(mesh._tree.child) > 1
+    moved = vertices * [1.2, 0.9, 1.0]
+    refit = mesh.with_vertices(moved)
+    fresh = proximity.TriangleMesh(moved, faces)
+    points = np.random.default_rng(4).normal(size=(500, 3))
+    for name, value in asdict(fresh.closest_point(points)).items():
+        np.testing.assert_array_equal(getattr(refit.closest_point(points), name), value, err_msg=name)
+
+
+@pytest.mark.parametrize(
+    ("kind", "scale"),
+    [(kind, scale) for kind in ("sphere", "soup") for scale in (1.0, 1e-30, 1e30)] + [("large sphere", 1.0)],
+)
 def test_refitted_bounds_hold_every_face_below(kind, scale):
     # The refit merges its children's ranges rather than measuring them:
     # every node's box and slabs must still hold the vertices of its faces,
     # after a twist that turns the faces far from their frames; with faces
-    # of zero area (no normal) among them too.
+    # of zero area (no normal) among them too; and in a tree refitted in
+    # several subtrees and the nodes above them (``REFIT_SUBTREE``).
     if kind == "sphere":
         vertices, faces = icosphere(3)
+    elif kind == "large sphere":
+        vertices, faces = icosphere(5)
+        assert len(faces) > 2 * REFIT_SUBTREE
     else:
         vertices, faces = soup(np.random.default_rng(3), 600, degenerate=0.3)
         vertices = vertices - 0.5
@@ -228,9 +252,13 @@ def test_refitted_bounds_hold_every_face_below(kind, scale):
     child, count, bounds = tree.child, tree.count, tree.bounds
 
     def rows(i):
-        if count[i] > 0:
-            return np.arange(child[i], child[i] + count[i])
-        return np.concatenate([rows(child[i]), rows(child[i] + 1)])
+        # A node's faces are those of its leftmost leaf to its rightmost one.
+        first = last = i
+        while count[first] == 0:
+            first = child[first]
+        while count[last] == 0:
+            last = child[last] + 1
+        return np.arange(child[first], child[last] + count[last])
 
     for i in range(len(child)):
         points = corners[rows(i)].reshape(-1, 3)

@@ -30,7 +30,7 @@ for its rows.  One module per job:
 from .bounds import FACE_COLUMNS
 from .build import LEAF_SIZE, assemble, brute, build_faces, build_tree, face_params
 from .nearest import nearest
-from .refit import refit_faces
+from .refit import refit_faces, refit_indexed
 from .tree import Tree
 
 __all__ = [
@@ -44,4 +44,5 @@ __all__ = [
     "face_params",
     "nearest",
     "refit_faces",
+    "refit_indexed",
 ]

@@ -56,6 +56,14 @@ def take_rows(source, rows):
     return out
 
 
+def take_rows_into(source, rows, out):
+    """:func:`take_rows` into ``out``, a float64 array ``(len(rows), source.shape[1])``."""
+    if len(rows) < GATHER_MIN:
+        np.take(source, rows, axis=0, out=out)
+    else:
+        _take_rows(readonly(source, np.float64), readonly(rows, np.int64), out)
+
+
 #: The integers of a tree's topology (``child``, ``count``) and of its
 #: primitives' indices (``index``): four bytes, where eight would cost about
 #: 7 bytes a face more, and no tree comes near :data:`MOST_PRIMITIVES`.

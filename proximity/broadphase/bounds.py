@@ -75,6 +75,10 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 #: Columns of a primitive's cull row: its box ``(lo, hi)``, then one slab ``(u, h_min, h_max)``.
 CULL_COLUMNS = 11
 
+#: The column of a face's first vertex index in the cull rows of a tree of
+#: faces read through their vertices (see :attr:`.tree.Tree.faces`).
+FACE_INDEX = CULL_COLUMNS
+
 #: Columns of the rows of a tree of faces alone (hulls of three points):
 #: their nine coordinates, without the padding of a collection of several
 #: kinds to :data:`~proximity.primitives.N_PARAMS`.
@@ -250,11 +254,11 @@ def _up32(x):
 
 
 @spliced
-def _stored_row(cull, k, out):
-    """Row ``k`` of :func:`stored_cull`."""
+def _stored_row(cull, k, out, j):
+    """Row ``k`` of :func:`stored_cull`, into row ``j`` of ``out``."""
     for a in range(3):
-        out[k, a] = _down32(cull[k, a])
-        out[k, 3 + a] = _up32(cull[k, 3 + a])
+        out[j, a] = _down32(cull[k, a])
+        out[j, 3 + a] = _up32(cull[k, 3 + a])
     # The axis towards zero, so it stays no longer than 1; u' . X differs
     # from u . X by at most sum |u - u'| max(|lo|, |hi|) over the box
     # (each difference exact: u' is near u, on a grid as fine as u's), and
@@ -263,13 +267,13 @@ def _stored_row(cull, k, out):
     for a in range(3):
         u = cull[k, 6 + a]
         f = math.copysign(max(np.float64(_down32(abs(u))), 0.0), u)
-        out[k, 6 + a] = np.float32(f)
+        out[j, 6 + a] = np.float32(f)
         d = abs(u - f)
         if d > 0.0:
             widen += d * max(abs(cull[k, a]), abs(cull[k, 3 + a]))
     widen *= 1.0 + 2.0**-40
-    out[k, 9] = _down32(cull[k, 9] - widen)
-    out[k, 10] = _up32(cull[k, 10] + widen)
+    out[j, 9] = _down32(cull[k, 9] - widen)
+    out[j, 10] = _up32(cull[k, 10] + widen)
 
 
 @kernel(nogil=True)
@@ -277,7 +281,7 @@ def _stored_rows(cull, out, lo, hi):
     """Rows ``lo .. hi - 1`` of :func:`stored_cull`: a serial kernel, run on
     the threads, which compiles in a fraction of a parallel loop's time."""
     for k in range(lo, hi):
-        _stored_row(cull, k, out)
+        _stored_row(cull, k, out, k)
 
 
 #: Rows per call of :func:`_stored_rows`.

@@ -21,13 +21,9 @@ import numpy as np
 from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
-from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, plane_row, primitive_cull, stored_cull
 from .refit import refit
 from .tree import Tree
-
-#: The column of a face's first vertex index in the cull rows of a tree of
-#: faces read through their vertices (see :attr:`.tree.Tree.faces`).
-FACE_INDEX = CULL_COLUMNS
 
 LEAF_SIZE = 4
 #: Most primitives a leaf holds in a tree over at least :data:`LARGE_TREE`

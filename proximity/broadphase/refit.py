@@ -5,6 +5,7 @@ that read them, and why they never change an answer, are in
 :mod:`.bounds`.
 """
 
+import dataclasses
 import math
 
 import numba
@@ -13,8 +14,8 @@ from numba import prange
 
 from .. import _pool, _threads, primitives
 from .._jit import inline, kernel, spliced
-from ._alloc import INDEX, empty, empty_ints, readonly
-from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
+from ._alloc import INDEX, empty, empty_ints, readonly, take_rows_into
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, _stored_row, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
@@ -300,32 +301,35 @@ def _ranges_merged(bounds, i, child):
 
 
 @inline
-def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices):
+def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices, base):
     """Every node of the subtree at ``root``: boxes and normal sums from the
     leaves up, then, but for ``root`` itself, its frame, and its ranges:
     exact for a leaf, from its children's above (:func:`_ranges_merged`),
-    children first."""
+    children first.  Row ``k`` of ``kinds``, ``params`` and ``cull`` is
+    stored primitive ``base + k``."""
     nodes, n = _subtree_nodes(root, start, end, child, count)
     for t in range(n - 1, -1, -1):
         i = nodes[t]
         if count[i] > 0:
             start[i] = child[i]
             end[i] = child[i] + count[i]
-            _merge(bounds, i, cull, start[i], end[i])
+            _merge(bounds, i, cull, start[i] - base, end[i] - base)
         else:
             start[i] = start[child[i]]
             end[i] = end[child[i] + 1]
             _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
     for t in range(n - 1, 0, -1):
-        _frame_and_ranges(bounds, nodes[t], start, end, child, count, kinds, params, cull, vertices)
+        _frame_and_ranges(bounds, nodes[t], start, end, child, count, kinds, params, cull, vertices, base)
 
 
 @inline
-def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices):
-    """Node ``i``'s frame, and its ranges: exact for a leaf, its children's otherwise."""
+def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base):
+    """Node ``i``'s frame, and its ranges: exact for a leaf (row ``k`` of
+    ``kinds``, ``params`` and ``cull`` is stored primitive ``base + k``), its
+    children's otherwise."""
     _frame(bounds, i)
     if count[i] > 0:
-        _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+        _ranges(bounds, i, start[i] - base, end[i] - base, kinds, params, cull, vertices)
     else:
         _ranges_merged(bounds, i, child)
 
@@ -352,23 +356,53 @@ def _gather_faces(vertices, faces, order, params, cull):
     _gather_rows(vertices, faces, order, params, cull, 0, order.shape[0])
 
 
+@inline
+def _indexed_rows(vertices, faces, first, last):
+    """``(params, cull)`` of stored faces ``first .. last - 1`` of a tree of
+    faces read through their vertices (:attr:`.tree.Tree.faces`), in new
+    arrays: the faces' coordinates and their float64 cull rows."""
+    params = np.empty((last - first, FACE_COLUMNS))
+    cull = np.empty((last - first, CULL_COLUMNS))
+    for k in range(first, last):
+        r = k - first
+        for v in range(3):
+            i = faces[k, FACE_INDEX + v]
+            for a in range(3):
+                params[r, 3 * v + a] = vertices[i, a]
+        p = params[r]
+        plane_row(cull, r, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
+    return params, cull
+
+
 @kernel(parallel=True)
-def _fit_faces(
-    vertices, faces, order, params, cull, bounds, top, tasks, start, end, child, count, kinds, hull
-):
-    """:func:`refit_faces`: each subtree's rows gathered and its nodes fitted
-    (ranges merged, children first), one subtree per task; then the nodes
-    above them."""
+def _fit_indexed(vertices, faces, out, out_faces, bounds, top, tasks, start, end, child, count, kinds, hull):
+    """:func:`refit_indexed`: each subtree's faces' rows computed, its cull
+    rows and vertex indices written, and its nodes fitted (ranges merged,
+    children first), one subtree per task; then the nodes above them.  The
+    faces' rows are held for one subtree at a time, while in cache."""
     for j in prange(tasks.shape[0]):
         root = tasks[j]
-        _gather_rows(vertices, faces, order, params, cull, start[root], end[root])
-        _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, hull)
+        first, last = start[root], end[root]
+        params, cull = _indexed_rows(vertices, faces, first, last)
+        for k in range(first, last):
+            _stored_row(cull, k - first, out, k)
+            for v in range(FACE_INDEX, FACE_INDEX + 3):
+                out_faces[k, v] = faces[k, v]
+        rows = kinds[first:last]
+        _fit_subtree_merged(bounds, root, start, end, child, count, rows, params, cull, hull, first)
     for t in range(top.shape[0] - 1, -1, -1):
         _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
+    # The subtrees' roots once the nodes above have summed their normals
+    # (``_frame`` writes a node's axis over its sum), then the nodes above,
+    # children first.
     for j in prange(tasks.shape[0]):
-        _frame_and_ranges(bounds, tasks[j], start, end, child, count, kinds, params, cull, hull)
+        i = tasks[j]
+        first, last = (start[i], end[i]) if count[i] > 0 else (start[i], start[i])
+        params, cull = _indexed_rows(vertices, faces, first, last)
+        _frame_and_ranges(bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first)
+    params, cull = _indexed_rows(vertices, faces, 0, 0)
     for t in range(top.shape[0] - 1, -1, -1):
-        _frame_and_ranges(bounds, top[t], start, end, child, count, kinds, params, cull, hull)
+        _frame_and_ranges(bounds, top[t], start, end, child, count, kinds[:0], params, cull, hull, 0)
 
 
 #: The steps of :func:`_fit_step`.
@@ -489,10 +523,28 @@ def _leaf_box(kinds, params, cull):
 
 
 def refit_faces(vertices, faces, order, child, count, kinds):
-    """``(params, cull, bounds)`` of a tree of faces whose vertices moved:
-    the rows of ``faces[order]`` of ``vertices`` (leaf order), their cull
-    rows, and the nodes' bounds over them, in one pass per subtree while
-    its rows are in cache.
+    """``(params, cull, bounds)`` of a tree of one leaf (brute force) whose
+    faces' vertices moved: the rows of ``faces[order]`` of ``vertices``, their
+    cull rows and the leaf's bounds (see :func:`refit_indexed` for trees of
+    more nodes)."""
+    params = _pool.empty((len(order), FACE_COLUMNS))
+    cull = _pool.empty((len(order), CULL_COLUMNS))
+    vertices, faces, order = (
+        readonly(vertices, np.float64),
+        readonly(faces, np.int64),
+        readonly(order, INDEX),
+    )
+    _gather_faces(vertices, faces, order, params, cull)
+    return params, cull, refit(child, count, kinds, params, cull)
+
+
+def refit_indexed(vertices, tree):
+    """The tree of faces read through their vertices ``tree`` (of more than
+    one node) over the moved ``vertices`` (the mesh's, in its order): the
+    same nodes and faces, each face's cull row computed anew, the nodes'
+    bounds fitted to them, in one pass per subtree while its faces are in
+    cache; the faces' rows are held for one subtree at a time, never for
+    the whole tree.
 
     Only the leaves' slab ranges are exact; a node above them takes the
     union of its children's ranges along its axis, each child's from its
@@ -502,38 +554,34 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     everything below: the oriented box's corners ``sum h_e e / |e|^2`` are
     exact for orthogonal axes, the frames depart from orthogonality by a
     few ``eps`` and the projections round by a few ``eps`` of the box's
-    magnitude, which the ``2^-36`` widening covers many times over.
+    magnitude, which the ``2^-36`` widening covers many times over.  The
+    cull rows are those of a build (:func:`.bounds.stored_cull` of the
+    faces' float64 rows), so a query prunes as it would in a fresh tree
+    with these bounds.
     """
     # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
     # over the memory of the frame before, once that mesh is gone, rather than
     # the system's fresh pages, whose first writes cost as much as the refit.
-    params = _pool.empty((len(order), FACE_COLUMNS))
-    cull = _pool.empty((len(order), CULL_COLUMNS))
-    vertices, faces, order = (
-        readonly(vertices, np.float64),
-        readonly(faces, np.int64),
-        readonly(order, INDEX),
-    )
-    if len(child) == 1:
-        _gather_faces(vertices, faces, order, params, cull)
-        return params, cull, refit(child, count, kinds, params, cull)
+    sources = readonly(tree.sources, np.int64)
+    rows = _pool.empty((len(sources), 3))
+    take_rows_into(readonly(vertices, np.float64), sources, rows)
+    faces = _pool.empty(tree.faces.shape, np.float32)
+    child, count = tree.child, tree.count
     bounds = _pool.empty((len(child), NODE_COLUMNS))
     top, tasks, start, end = _tasks(child, count)
     with numba.parallel_chunksize(1):
-        _fit_faces(
-            vertices,
-            faces,
-            order,
-            params,
-            cull,
-            bounds,
-            top,
-            tasks,
-            start,
-            end,
-            child,
-            count,
-            kinds,
-            _VERTICES,
-        )
-    return params, cull, bounds
+        _fit_indexed(
+            rows, tree.faces, faces, faces.view(np.int32), bounds, top, tasks, start, end, child, count,
+            tree.kinds, _VERTICES,
+        )  # fmt: skip
+    faces = readonly(faces, np.float32)
+    bounds = readonly(bounds, np.float64)
+    return dataclasses.replace(
+        tree,
+        bounds=bounds,
+        cull=faces,
+        loose_bounds=bounds,
+        loose_cull=faces,
+        vertices=readonly(rows, np.float64),
+        faces=readonly(faces.view(np.int32), np.int32),
+    )
