@@ -698,18 +698,7 @@ class TriangleMesh(Collection):
         if len(tree.index) != len(self.faces) or (len(tree.child) > 1 and not tree.indexed):
             return TriangleMesh(v, self.faces, broad_phase=self.broad_phase)
         with _threads.kernel():
-            broadphase = _lazy.load("proximity.broadphase")
-            if len(tree.child) > 1:
-                moved = broadphase.refit_indexed(v, tree)
-            else:
-                params, cull, bounds = broadphase.refit_faces(
-                    v, self.faces, tree.index, tree.child, tree.count, tree.kinds
-                )
-                read = (lambda: broadphase.build.moved_faces(v, tree)) if tree.indexed else None
-                moved = broadphase.assemble(
-                    tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
-                    empty=_pool.empty, faces=read,
-                )  # fmt: skip
+            moved = _lazy.load("proximity.broadphase").build.refitted(tree, v, self.faces, _pool.empty)
         mesh = object.__new__(TriangleMesh)
         mesh._init(
             vertices=v,

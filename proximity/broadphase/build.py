@@ -22,7 +22,7 @@ from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, plane_row, primitive_cull, stored_cull
-from .refit import refit
+from .refit import refit, refit_faces, refit_indexed
 from .tree import Tree
 
 LEAF_SIZE = 4
@@ -547,6 +547,20 @@ def moved_faces(vertices, tree):
     its faces over moved ``vertices``: the same rows, renumbered as before."""
     rows = readonly(take_rows(readonly(vertices, np.float64), tree.sources), np.float64)
     return rows, tree.faces[:, -3:], tree.sources
+
+
+def refitted(tree, vertices, faces, empty=np.empty):
+    """The tree of the faces ``faces`` of moved ``vertices``, ``tree`` (built
+    on them, with none left out) refitted: :func:`.refit.refit_indexed`, or
+    the rows of a tree of one leaf gathered anew, in arrays from ``empty``."""
+    if len(tree.child) > 1:
+        return refit_indexed(vertices, tree)
+    params, cull, bounds = refit_faces(vertices, faces, tree.index, tree.child, tree.count, tree.kinds)
+    read = (lambda: moved_faces(vertices, tree)) if tree.indexed else None
+    return assemble(
+        tree.kinds, params, tree.index, tree.child, tree.count, tree.depth, (cull, cull), bounds,
+        empty=empty, faces=read,
+    )  # fmt: skip
 
 
 def faces_reader(vertices, faces, index):
