@@ -128,6 +128,9 @@ shapes = [
 for shape in shapes:
     shape.distance(rng.random((n, 3)) * 100, method="eberly")
 mesh.signed_distance(rng.random((10, 3)) * 100, method="eberly", sign="winding")
+# Refits: of the tree, and of a tree of one leaf.
+mesh.with_vertices(vertices * 1.5)
+shapes[1].with_vertices(vertices[:20] * 1.5)
 """
 
 
@@ -148,7 +151,7 @@ def test_a_new_process_loads_what_compile_all_compiled(tmp_path):
     ahead = compiled("import proximity.compile; proximity.compile.compile_all([], log=None)")
     # A specialised kernel is named after its function, its tag and a stamp of the sources.
     names = {name.split("__")[0] for name in ahead}
-    expected = {"_build_step", "_face_step", "_fit_step", "_fit_faces", "_gather_faces", "_empty"}
+    expected = {"_build_step", "_face_step", "_fit_step", "_fit_indexed", "_gather_faces", "_empty"}
     expected |= {"_take_rows"}
     assert expected | {"round_frames"} <= names
     assert not compiled(_QUERIES) & ahead
