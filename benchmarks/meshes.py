@@ -74,6 +74,7 @@ import numpy as np
 
 import proximity
 from benchmarks import accuracy
+from benchmarks.peers import can_reset_peak, peak_kib, reset_peak, rss_kib
 from benchmarks.suite import timed
 from proximity.testing.meshes import (  # noqa: F401  (the benchmark's meshes and references)
     EPS,
@@ -171,20 +172,6 @@ def _installed(module):
 # -- memory ------------------------------------------------------------------------------
 
 
-def _peak_kib():
-    text = Path("/proc/self/status").read_text()
-    return int(re.search(r"VmHWM:\s+(\d+)", text).group(1))
-
-
-def _rss_kib():
-    text = Path("/proc/self/status").read_text()
-    return int(re.search(r"VmRSS:\s+(\d+)", text).group(1))
-
-
-def _reset_peak():
-    Path("/proc/self/clear_refs").write_text("5")
-
-
 def _memory_child(what, n_points, n_major, n_minor, seed):
     """In a fresh process: ``{"before_mib", "peak_mib", "added_mib"}`` around one operation."""
     rng = np.random.default_rng(seed)
@@ -211,17 +198,17 @@ def _memory_child(what, n_points, n_major, n_minor, seed):
             return trimesh.proximity.closest_point(tm, points)
     else:
         raise ValueError(what)
-    _reset_peak()
-    before = _rss_kib()
+    reset_peak()
+    before = rss_kib()
     result = run()
-    peak = _peak_kib()
+    peak = peak_kib()
     del result
     return {"before_mib": before / 1024, "peak_mib": peak / 1024, "added_mib": (peak - before) / 1024}
 
 
 def measure_memory(what, n_points, n_major, n_minor, seed):
     """:func:`_memory_child` in a subprocess; None where ``/proc`` cannot reset the peak."""
-    if not Path("/proc/self/clear_refs").exists():
+    if not can_reset_peak():
         return None
     args = [sys.executable, "-m", "benchmarks.meshes", "--memory-child", what, str(n_points)]
     args += [str(n_major), str(n_minor), str(seed)]
