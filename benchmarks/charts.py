@@ -141,6 +141,8 @@ PEER_STYLE = {
     "open3d": ("tab:green", "s"),
     "libigl": ("tab:orange", "D"),
     "warp": ("tab:purple", "v"),
+    "fcpw": ("tab:cyan", "*"),
+    "meshlib": ("tab:gray", "h"),
     "coal": ("tab:brown", "P"),
     "fcl": ("tab:red", "^"),
     "pcu": ("tab:olive", "X"),

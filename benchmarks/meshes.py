@@ -38,13 +38,16 @@ and ``families``: records in the format of :mod:`benchmarks.suite` (kind
 
 **The peers** (``run_peers``; about ten minutes on two cores, ``--quick`` half a
 minute) compare proximity with each library of :mod:`benchmarks.peers`
-(Open3D, libigl, Warp on the CPU, coal, python-fcl, point-cloud-utils,
-trimesh), each in a process of its own, on trimesh's icospheres of 20,480
-and 1,310,720 faces and a torus of 1,000,000 faces (``--quick``: 1,280,
-20,480 and 20,000), with 100,000 points per set (``--quick``: 5,000):
-*near* as above and *box*, uniform in 1.5 times the bounding box.  For
-each library: the build time; points per second of the unsigned and of the
-signed distance, on one thread and on all; the largest error against the
+(Open3D, libigl, Warp on the CPU, FCPW's wheel, MeshLib, coal, python-fcl,
+point-cloud-utils, trimesh), each in a process of its own, on trimesh's
+icospheres of 20,480 and 1,310,720 faces and a torus of 1,000,000 faces
+(``--quick``: 1,280, 20,480 and 20,000), with 100,000 points per set
+(``--quick``: 5,000): *near* as above and *box*, uniform in 1.5 times the
+bounding box.  For each library: the build time; the memory its build keeps
+and its build's peak, in bytes per face (growth of ``VmRSS`` and of
+``VmHWM`` over the build, in the child, with the mesh's arrays already
+loaded; see :mod:`benchmarks.peers`); points per second of the unsigned and
+of the signed distance, on one thread and on all; the largest error against the
 exact distance on the first 200 points (``--quick``: 50); the points whose
 distance is off the ``certified`` one (within an ulp of the exact
 distance) by more than the library's precision allows, which is a face
@@ -52,6 +55,12 @@ that is not the nearest; and the wrong signs, on points farther than
 ``SIGN_BAND`` of the size from the surface, against the solid itself
 (:func:`reference_inside`).  A library that does not install or import is
 skipped with the reason.  ``OUT/mesh_peers.json`` holds the raw data.
+The project's targets for this part (:data:`PEER_TARGETS`: proximity's
+memory on the 1,310,720-face icosphere, its one-thread speed and its build
+time against FCPW's wheel there, its one-thread speed against Warp's on the
+meshes of about 20,000 faces) go to ``OUT/checks-meshes.txt`` with the
+torus' (:func:`peers_checks`); a target whose mesh or library is not in the
+run gets an ``n/a`` line.
 
 ``--crossover`` times brute force against the BVH on 10,000 points
 uniform in the bounding box of ``n`` triangles scattered in a unit cube,
@@ -74,6 +83,7 @@ import numpy as np
 
 import proximity
 from benchmarks import accuracy
+from benchmarks.peers import can_reset_peak, peak_kib, reset_peak, rss_kib
 from benchmarks.suite import timed
 from proximity.testing.meshes import (  # noqa: F401  (the benchmark's meshes and references)
     EPS,
@@ -171,20 +181,6 @@ def _installed(module):
 # -- memory ------------------------------------------------------------------------------
 
 
-def _peak_kib():
-    text = Path("/proc/self/status").read_text()
-    return int(re.search(r"VmHWM:\s+(\d+)", text).group(1))
-
-
-def _rss_kib():
-    text = Path("/proc/self/status").read_text()
-    return int(re.search(r"VmRSS:\s+(\d+)", text).group(1))
-
-
-def _reset_peak():
-    Path("/proc/self/clear_refs").write_text("5")
-
-
 def _memory_child(what, n_points, n_major, n_minor, seed):
     """In a fresh process: ``{"before_mib", "peak_mib", "added_mib"}`` around one operation."""
     rng = np.random.default_rng(seed)
@@ -211,17 +207,17 @@ def _memory_child(what, n_points, n_major, n_minor, seed):
             return trimesh.proximity.closest_point(tm, points)
     else:
         raise ValueError(what)
-    _reset_peak()
-    before = _rss_kib()
+    reset_peak()
+    before = rss_kib()
     result = run()
-    peak = _peak_kib()
+    peak = peak_kib()
     del result
     return {"before_mib": before / 1024, "peak_mib": peak / 1024, "added_mib": (peak - before) / 1024}
 
 
 def measure_memory(what, n_points, n_major, n_minor, seed):
     """:func:`_memory_child` in a subprocess; None where ``/proc`` cannot reset the peak."""
-    if not Path("/proc/self/clear_refs").exists():
+    if not can_reset_peak():
         return None
     args = [sys.executable, "-m", "benchmarks.meshes", "--memory-child", what, str(n_points)]
     args += [str(n_major), str(n_minor), str(seed)]
@@ -410,6 +406,76 @@ def checks(raw):
     return missed, lines
 
 
+#: The targets of the peers' run: proximity's build memory on the large icosphere, in bytes per face
+#: (kept, peak); its one-thread near-surface speed over FCPW's wheel's there (at least) and its build
+#: time over FCPW's (at most); and, on the meshes of about 20,000 faces, its one-thread speed above
+#: Warp's on the CPU.
+PEER_TARGETS = {"kept": 120.0, "peak": 250.0, "fcpw_speed": 2.5, "fcpw_build": 0.7}
+PEER_LARGE_FACES = 1_310_720
+PEER_SMALL_FACES = (15_000, 30_000)
+
+
+def _verdict(met, text):
+    return ("met     " if met else "MISSED  ") + text
+
+
+def _compare(text, ours, theirs, peer, target, bound="at least", note=""):
+    """A verdict on ``ours / theirs`` against ``target`` (``bound``: "at least", "at most" or
+    "above"), or ``n/a`` where one of them did not run."""
+    if ours is None or theirs is None:
+        return f"n/a     {text}: {peer if theirs is None else 'proximity'} did not run"
+    ratio = ours / theirs
+    met = {"at least": ratio >= target, "at most": ratio <= target, "above": ratio > target}[bound]
+    return _verdict(met, f"{text}: {ratio:.2f}x (target {bound} {target:g}x{note})")
+
+
+def peers_checks(raw):
+    """The peers' run against :data:`PEER_TARGETS`: ``(missed, lines)``, one line per target; a
+    target whose mesh or peer is not in the run gets an ``n/a`` line, which is not counted missed."""
+    lines = []
+    threads_all = raw["meta"]["threads_all"]
+    low, high = PEER_SMALL_FACES
+    large = [(label, e) for label, e in raw["meshes"].items() if e["faces"] == PEER_LARGE_FACES]
+    small = [(label, e) for label, e in raw["meshes"].items() if low <= e["faces"] <= high]
+    if not large:
+        lines.append(f"n/a     proximity's memory, and its speed and build time over FCPW's, on the "
+                     f"{PEER_LARGE_FACES:,}-face icosphere: that mesh is not in this run")  # fmt: skip
+    for label, entry in large:
+        kept, peak = _memory(entry, "proximity")
+        for key, value, what in (("kept", kept, "memory kept after the build"), ("peak", peak, "build peak")):
+            text = f"proximity's {what}, {label}"
+            if value is None:
+                lines.append(f"n/a     {text}: not measured (proximity did not run, or no /proc)")
+            else:
+                target = PEER_TARGETS[key]
+                lines.append(_verdict(value <= target, f"{text}: {value:.0f} bytes per face (target at most "
+                                      f"{target:g}; the larger of the runs)"))  # fmt: skip
+        text = f"speed-up over FCPW's wheel, {label}, near points, unsigned, 1 thread"
+        ours, theirs = (_qps(entry, name, 1, "near", "unsigned") for name in ("proximity", "fcpw"))
+        lines.append(_compare(text, ours, theirs, "FCPW", PEER_TARGETS["fcpw_speed"]))
+        ours, theirs = (_build(entry, name, threads_all) for name in ("proximity", "fcpw"))
+        one = [_build(entry, name, 1) for name in ("proximity", "fcpw")]
+        note = f"; on 1 thread {one[0] / one[1]:.2f}x" if None not in one else ""
+        text = f"build time over FCPW's wheel's, {label}, {threads_all} threads"
+        lines.append(_compare(text, ours, theirs, "FCPW", PEER_TARGETS["fcpw_build"], "at most", note))
+    if not small:
+        lines.append(f"n/a     speed-up over Warp (CPU) on the meshes of {low:,} to {high:,} faces: none in "
+                     f"this run")  # fmt: skip
+    for label, entry in small:
+        for set_name in ("near", "box"):
+            text = f"speed-up over Warp (CPU), {label}, {set_name} points, unsigned, 1 thread"
+            ours, theirs = (_qps(entry, name, 1, set_name, "unsigned") for name in ("proximity", "warp"))
+            lines.append(_compare(text, ours, theirs, "Warp", 1.0, "above"))
+    return sum(line.startswith("MISSED") for line in lines), lines
+
+
+def write_checks(path, missed, lines):
+    """The verdicts to ``path``, and one line on standard error: how many of the judged ones were met."""
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    judged = sum(not line.startswith("n/a") for line in lines)
+    print(f"the project's targets: {judged - missed} of {judged} met ({path})", file=sys.stderr)
+
+
 def report(raw):
     """The run as text: throughput, ratios, build, memory, worst errors."""
     lines = ["points/s (proximity: all points, median of the repeats; others: one call on a subset)"]
@@ -564,8 +630,10 @@ def run_peers(quick=False, seed=0, out=Path("bench-results"), names=None, log=pr
     """proximity against every peer of :mod:`benchmarks.peers` on :data:`PEER_MESHES`.
 
     Returns the JSON-ready record: ``meta`` and, per mesh, ``faces``,
-    ``reference`` (seconds and counts) and per peer ``runs``: the children's
-    records by thread count, with the errors of their answers.
+    ``reference`` (seconds and counts) and per peer ``label``,
+    ``precision``, ``threads``, ``rebuilds`` and ``runs``: the children's
+    records by thread count (``build``, ``memory``, ``sets``), with the
+    errors of their answers.
     """
     import numba
 
@@ -649,6 +717,7 @@ def run_peers(quick=False, seed=0, out=Path("bench-results"), names=None, log=pr
                 "label": peer.label,
                 "precision": peer.precision,
                 "threads": peer.threads,
+                "rebuilds": list(peer.rebuilds),
                 "runs": runs,
             }
         raw["meshes"][label] = entry
@@ -661,6 +730,10 @@ def _brief(record):
     if "sets" not in record:
         return record.get("skipped") or record.get("error", "?")
     cells = [f"build {1e3 * record['build']:.1f} ms"]
+    memory = record.get("memory")
+    if memory:
+        kept, peak = (1024 * memory[key] / memory["faces"] for key in ("kept_kib", "peak_kib"))
+        cells.append(f"kept {kept:.0f} B/face, peak {peak:.0f} B/face")
     for name, timings in record["sets"].items():
         for kind, timing in timings.items():
             cells.append(f"{name} {kind} {timing['qps']:,.0f}/s")
@@ -671,6 +744,23 @@ def _qps(entry, name, threads, set_name, kind):
     record = entry["peers"].get(name, {}).get("runs", {}).get(str(threads), {})
     timing = record.get("sets", {}).get(set_name, {}).get(kind)
     return None if timing is None else timing["qps"]
+
+
+def _memory(entry, name):
+    """``(kept, peak)`` of the peer's build in bytes per face, the larger over its runs (one per
+    thread count); None where not measured."""
+    runs = entry["peers"].get(name, {}).get("runs", {}).values()
+    measured = [record["memory"] for record in runs if record.get("memory")]
+    if not measured:
+        return None, None
+    return tuple(max(1024 * m[key] / m["faces"] for m in measured) for key in ("kept_kib", "peak_kib"))
+
+
+def _build(entry, name, threads):
+    """The peer's build time in seconds, from its run on ``threads`` (a one-thread peer's only run)."""
+    runs = entry["peers"].get(name, {}).get("runs", {})
+    record = runs.get(str(threads)) or runs.get("1", {})
+    return record.get("build")
 
 
 def peers_summary(raw):
@@ -734,9 +824,14 @@ def peers_markdown(raw, path="docs/performance.md", chart=None):
         f"from the `certified` one (within an ulp of the exact distance) by more than 16 units of the "
         f"library's precision times the coordinates' magnitude: a face that is not the nearest, or no "
         f"answer. *wrong signs*: against the solid the mesh approximates, on points farther than "
-        f"{SIGN_BAND:g} of the size from the surface. libigl's `signed_distance` and both of "
-        f"point-cloud-utils' functions build their tree in every call, as their Python functions do; Warp "
-        f"runs its CPU kernels on one thread, and coal, fcl and trimesh answer one point at a time "
+        f"{SIGN_BAND:g} of the size from the surface. *kept*: the growth of the process's resident set "
+        f"over the build, after the C heap's free pages go back to the system; *build peak*: the growth "
+        f"of its peak; both with the mesh's arrays already made, in bytes per face, the larger of the "
+        f"library's runs (the library's own copies of the mesh count). libigl's `signed_distance` and both "
+        f"of point-cloud-utils' functions build their tree in every call, as their Python functions do; "
+        f"Warp runs its CPU kernels on one thread; FCPW (its wheel: a binary BVH, float32, the wide SIMD "
+        f"tree left out of the wheel) and MeshLib are held to 1 core by the process's affinity, as their "
+        f"batch calls use every core they find; coal, fcl and trimesh answer one point at a time "
         f"(= 1 thread). "
         f"Made by `python -m benchmarks.meshes --write {path}` "
         f"on {meta['cpus']} cores shared with other jobs (load average at the end {load}).",
@@ -748,9 +843,10 @@ def peers_markdown(raw, path="docs/performance.md", chart=None):
     for label, entry in raw["meshes"].items():
         lines += ["", f"**{label[0].upper() + label[1:]}**", ""]
         lines += [
-            f"| unsigned | precision | build (ms) | near, 1 thread | near, {threads_all} threads | "
-            f"box, 1 thread | box, {threads_all} threads | max error (near, box) | off (near, box) |",
-            "|---|---|---:|---:|---:|---:|---:|---|---|",
+            f"| unsigned | precision | build (ms) | kept (B/face) | build peak (B/face) | near, 1 thread | "
+            f"near, {threads_all} threads | box, 1 thread | box, {threads_all} threads | "
+            f"max error (near, box) | off (near, box) |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|",
         ]
         signed_rows, skipped = [], []
         for name, peer in entry["peers"].items():
@@ -759,7 +855,11 @@ def peers_markdown(raw, path="docs/performance.md", chart=None):
             if "sets" not in first:
                 skipped.append(f"{peer['label']}: {first.get('skipped') or first.get('error')}")
                 continue
-            build = runs.get(str(threads_all), first)["build"]
+            build = _build(entry, name, threads_all)
+            if set(peer.get("rebuilds", ())) >= {"unsigned", "signed"}:
+                memory = ["in every call"] * 2
+            else:
+                memory = [_cell(value) for value in _memory(entry, name)]
             speeds, errors, signed, wrong = [], [], [], []
             for set_name in ("near", "box"):
                 for threads in (1, threads_all):
@@ -775,7 +875,7 @@ def peers_markdown(raw, path="docs/performance.md", chart=None):
             max_error = ", ".join(f"{e[0]:.2g}" for e in errors)
             off = ", ".join(f"{e[1]:,} of {e[2]:,}" for e in errors)
             lines.append(
-                f"| {peer['label']} | {peer['precision']} | {_cell(1e3 * build)} | "
+                f"| {peer['label']} | {peer['precision']} | {_cell(1e3 * build)} | {' | '.join(memory)} | "
                 + " | ".join(cells)
                 + f" | {max_error} | {off} |"
             )
@@ -871,6 +971,8 @@ def main(argv=None):
         return 0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    # Both parts' verdicts, written after each part.
+    verdicts, missed, lines = out / "checks-meshes.txt", 0, []
     if not args.peers_only:
         with np.errstate(all="ignore"):
             raw = run(quick=args.quick, seed=args.seed)
@@ -878,10 +980,7 @@ def main(argv=None):
         print(report(raw))
         print(f"raw data: {out / 'meshes.json'}")
         missed, lines = checks(raw)
-        verdicts = out / "checks-meshes.txt"
-        verdicts.write_text("\n".join(lines) + "\n", encoding="utf-8")
-        met = len(lines) - missed
-        print(f"the project's targets: {met} of {len(lines)} met ({verdicts})", file=sys.stderr)
+        write_checks(verdicts, missed, lines)
         if args.write:
             write_section(args.write, markdown(raw, args.write))
     if not args.no_peers:
@@ -890,6 +989,8 @@ def main(argv=None):
         (out / "mesh_peers.json").write_text(json.dumps(raw, indent=1))
         print(peers_report(raw))
         print(f"raw data: {out / 'mesh_peers.json'}")
+        more_missed, more = peers_checks(raw)
+        write_checks(verdicts, missed + more_missed, lines + more)
         from benchmarks import charts
 
         with np.errstate(over="ignore"):

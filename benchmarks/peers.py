@@ -18,6 +18,12 @@ libigl      ``AABB.squared_distance``; ``igl.signed_distance``          float64 
             (pseudonormal; builds its tree in every call)
 warp        ``mesh_query_point_no_sign``;                               float32    one: Warp runs CPU kernels
             ``mesh_query_point_sign_normal``, in a kernel on the CPU               on one thread
+fcpw        ``scene_3D.find_closest_points`` on a                       float32    the process held to n
+            ``bvh_surface_area`` BVH; ``Interaction.signed_distance``              cores (its own threads,
+            of each answer (the nearest face's normal), in a Python                one per core of the
+            loop                                                                   machine, per call)
+meshlib     ``findSignedDistances`` (absolute value for the unsigned);  float32    the process held to n
+            the same (pseudonormal)                                                cores (TBB)
 coal        ``coal.distance`` of an OBBRSS ``BVHModel`` and a           float64    one (a Python loop)
             ``Sphere(0)`` moved to each point; none
 fcl         the same with python-fcl; none                              float64    one (a Python loop)
@@ -26,16 +32,51 @@ pcu         ``closest_points_on_mesh``; ``signed_distance_to_mesh``     float64 
 trimesh     ``proximity.closest_point``; ``proximity.signed_distance``  float64    one
 ==========  ==========================================================  =========  ===========================
 
+FCPW: the fastest closest-point set-up its wheel (1.2) offers.  The wheel is
+built without Enoki (``FCPW_USE_ENOKI=OFF`` in its ``pyproject.toml``), so
+``build(..., vectorize=True)`` gives the same binary BVH with leaves of 4
+triangles as ``vectorize=False`` (the same statistics with
+``print_stats=True``); its SIMD wide-node tree (``mbvh``) needs a build from
+source.  The batch calls start ``std::thread::hardware_concurrency()``
+threads each, whatever the affinity, so on one core those threads share it.
+The unsigned query's answers come back as a list of ``Interaction``
+objects; reading their distances in a Python loop (about 70 ns a point) is
+left out of its time.  The signed distance is that loop calling each
+answer's ``signed_distance`` (the sign of the offset along the nearest
+face's normal), which is timed: it is where the sign is computed.
+MeshLib: its Python API has no batch unsigned query that returns an array
+(``PointsToMeshProjector.findProjections`` returns a list of objects that
+takes longer to read than the query takes), so the unsigned distance is the
+absolute value of the signed one, sign included in its time.  FCPW's
+``scene_3D.contains`` would sign a batch, but its NumPy result is not
+written back by the wheel's binding.
+
+Memory: each child measures its build in its own process, with the mesh's
+arrays already loaded and the library loaded and warmed on a small mesh:
+*kept* is the growth of ``VmRSS`` over the build (after ``malloc_trim(0)``,
+so that memory the C allocator keeps but no longer uses is not counted),
+*peak* the growth of ``VmHWM``, reset through ``/proc/self/clear_refs``
+just before.  The library's own copies of the mesh (float32 vertices, 32-bit
+faces, half-edges) count as its memory; where a call builds the tree
+(``rebuilds``), the build keeps nothing.
+
 The child's command line: ``python -m benchmarks.peers NAME DATA.npz THREADS
 OUT.npz``: ``DATA.npz`` holds ``vertices``, ``faces`` and one array of
 points per set; the child writes the answers to ``OUT.npz`` and prints one
 line of JSON: ``{"build": s, "sets": {set: {"unsigned": timing, "signed":
-timing}}}`` or ``{"skipped": reason}``.
+timing}}, "memory": {"faces", "before_kib", "kept_kib", "peak_kib"}}`` (``memory``
+None where ``/proc`` cannot reset the peak) or ``{"skipped": reason}``.
 """
 
+import ctypes
+import ctypes.util
+import gc
 import json
+import os
+import re
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -47,7 +88,8 @@ class Peer:
     label = ""
     module = ""
     precision = "float64"
-    #: "parameter" (set per call), "environment" (read at start-up) or "one".
+    #: "parameter" (set per call), "environment" (read at start-up), "affinity" (the
+    #: child process held to that many cores) or "one".
     threads = "one"
     has_signed = True
     #: The queries ("unsigned", "signed") that build the library's tree in
@@ -70,6 +112,10 @@ class Peer:
 
     def distance(self, built, points, threads):
         raise NotImplementedError
+
+    def answers(self, result):
+        """The distances, from what :meth:`distance` returned (outside the time)."""
+        return result
 
     def signed(self, built, points, threads):
         raise NotImplementedError
@@ -234,6 +280,92 @@ class Warp(Peer):
         return self._run(self.kernels[1], mesh, points)
 
 
+def _grid(n=64):
+    """A square of ``2 n**2`` triangles: a mesh big enough that a library warmed on it starts its
+    thread pool, small enough to take no time."""
+    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="ij")
+    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
+    corner = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    faces = np.concatenate([np.stack([corner, corner + n + 1, corner + 1], axis=1),
+                            np.stack([corner + 1, corner + n + 1, corner + n + 2], axis=1)])  # fmt: skip
+    return vertices, faces
+
+
+class FCPW(Peer):
+    name = "fcpw"
+    label = "FCPW (wheel)"
+    module = "fcpw"
+    precision = "float32"
+    threads = "affinity"
+
+    def warm(self):
+        built = self.build(*_grid())
+        self.distance(built, np.ones((1000, 3)), 1)
+        self.signed(built, np.ones((1000, 3)), 1)
+
+    def build(self, vertices, faces):
+        import fcpw
+
+        scene = fcpw.scene_3D()
+        scene.set_object_count(1)
+        scene.set_object_vertices(np.asfortranarray(vertices, dtype=np.float32), 0)
+        scene.set_object_triangles(np.asfortranarray(faces, dtype=np.int32), 0)
+        # vectorize=True asks for the wide-node tree; the wheel, built without Enoki, builds the binary one.
+        scene.build(fcpw.aggregate_type.bvh_surface_area, True)
+        return scene
+
+    def _closest(self, scene, points, record_normal):
+        import fcpw
+
+        query = np.asfortranarray(points, dtype=np.float32)
+        found = fcpw.interaction_3D_list()
+        radii = np.full(len(points), np.inf, dtype=np.float32)  # no bound on the search
+        scene.find_closest_points(query, radii, found, record_normal)
+        return query, found
+
+    def distance(self, scene, points, threads):
+        return self._closest(scene, points, False)[1]
+
+    def answers(self, found):
+        # A Python loop over the wheel's list of answers (about 70 ns a point): left out of the time.
+        return np.array([hit.d for hit in found], dtype=np.float64)
+
+    def signed(self, scene, points, threads):
+        query, found = self._closest(scene, points, True)
+        return np.array([hit.signed_distance(x) for hit, x in zip(found, query, strict=True)])
+
+
+class MeshLib(Peer):
+    name = "meshlib"
+    label = "MeshLib findSignedDistances"
+    module = "meshlib.mrmeshpy"
+    precision = "float32"
+    threads = "affinity"
+
+    def warm(self):
+        built = self.build(*_grid())
+        self.signed(built, np.ones((1000, 3)), 1)
+
+    def build(self, vertices, faces):
+        from meshlib import mrmeshnumpy
+
+        mesh = mrmeshnumpy.meshFromFacesVerts(
+            np.ascontiguousarray(faces, dtype=np.int32), np.ascontiguousarray(vertices, dtype=np.float32)
+        )
+        mesh.getAABBTree()  # built on first use otherwise
+        return mesh
+
+    def distance(self, mesh, points, threads):
+        return np.abs(self.signed(mesh, points, threads))
+
+    def signed(self, mesh, points, threads):
+        from meshlib import mrmeshnumpy, mrmeshpy
+
+        query = np.ascontiguousarray(points, dtype=np.float32)
+        query = mrmeshpy.VertCoords(mrmeshnumpy.fromNumpyArray(query))
+        return np.array(mrmeshpy.findSignedDistances(mesh, query).vec, dtype=np.float64)
+
+
 class Coal(Peer):
     name = "coal"
     label = "coal, per point"
@@ -346,18 +478,83 @@ class Trimesh(Peer):
 
 PEERS = {
     peer.name: peer
-    for peer in (Proximity(), Open3D(), Libigl(), Warp(), Coal(), FCL(), PointCloudUtils(), Trimesh())
+    for peer in (Proximity(), Open3D(), Libigl(), Warp(), FCPW(), MeshLib(), Coal(), FCL(),
+                 PointCloudUtils(), Trimesh())  # fmt: skip
 }
 
 
-def measure(call, points, target=1.0, repeats=3, whole=False):
+# -- memory (Linux: /proc/self) ------------------------------------------------------------
+
+
+def _status_kib(field):
+    text = Path("/proc/self/status").read_text()
+    return int(re.search(rf"{field}:\s+(\d+)", text).group(1))
+
+
+def rss_kib():
+    """The process's resident set now (``VmRSS``), KiB."""
+    return _status_kib("VmRSS")
+
+
+def peak_kib():
+    """The largest resident set since the start or the last :func:`reset_peak` (``VmHWM``), KiB."""
+    return _status_kib("VmHWM")
+
+
+def reset_peak():
+    """Set ``VmHWM`` to the resident set now."""
+    Path("/proc/self/clear_refs").write_text("5")
+
+
+def can_reset_peak():
+    return Path("/proc/self/clear_refs").exists()
+
+
+def _release_free_heap():
+    """Return the C heap's free pages to the system (glibc's ``malloc_trim``; elsewhere nothing), so
+    that ``VmRSS`` counts what is in use, not what the allocator keeps for later."""
+    name = ctypes.util.find_library("c")
+    try:
+        libc = ctypes.CDLL(name)
+    except OSError:
+        return
+    if hasattr(libc, "malloc_trim"):
+        libc.malloc_trim(0)
+
+
+def measure_build(build):
+    """``(built, seconds, memory)`` of ``build()``: the growth of ``VmRSS`` over it (kept) and of
+    ``VmHWM`` (peak), in KiB; ``memory`` is None where ``/proc`` cannot reset the peak."""
+    measured = can_reset_peak()
+    if measured:
+        gc.collect()
+        _release_free_heap()
+        reset_peak()
+        before = rss_kib()
+    start = time.perf_counter()
+    built = build()
+    seconds = time.perf_counter() - start
+    if not measured:
+        return built, seconds, None
+    peak = peak_kib()
+    gc.collect()
+    _release_free_heap()
+    memory = {"before_kib": before, "kept_kib": rss_kib() - before, "peak_kib": peak - before}
+    return built, seconds, memory
+
+
+# -- the child process ----------------------------------------------------------------------
+
+
+def measure(call, points, target=1.0, repeats=3, whole=False, finish=None):
     """Time ``call`` on a prefix of ``points`` that takes about ``target`` seconds (all of them if faster).
 
     The prefix grows from 200 points until one call takes ``target``
     seconds or covers every point; the last size is then timed up to
     ``repeats`` times in all, while the calls add up to ``3 target``.
     ``whole``: every point from the start.  Returns ``(timing, answers)``
-    with ``timing = {"n", "seconds", "qps"}`` (the median).
+    with ``timing = {"n", "seconds", "qps"}`` (the median); ``finish``, if
+    given, turns the last call's result into the answers, untimed.
     """
     n = len(points) if whole else min(len(points), 200)
     while True:
@@ -373,12 +570,18 @@ def measure(call, points, target=1.0, repeats=3, whole=False):
         call(points[:n])
         times.append(time.perf_counter() - start)
     median = float(np.median(times))
-    return {"n": int(n), "seconds": times, "qps": n / median}, answers
+    return {"n": int(n), "seconds": times, "qps": n / median}, answers if finish is None else finish(answers)
 
 
 def child(name, data_path, threads, out_path):
     """Build the mesh with peer ``name``, time its queries on every point set, save the answers."""
     peer = PEERS[name]
+    if peer.threads == "affinity":
+        if not hasattr(os, "sched_setaffinity"):
+            return {"skipped": f"{peer.label}'s threads follow the cores the process may use: no "
+                    "os.sched_setaffinity here to set them"}  # fmt: skip
+        # Before the library loads: TBB sizes its pool from the affinity it finds then.
+        os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:threads])
     reason = peer.available()
     if reason is not None:
         return {"skipped": reason}
@@ -386,9 +589,10 @@ def child(name, data_path, threads, out_path):
     vertices, faces = data["vertices"], data["faces"]
     sets = [key for key in data.files if key not in ("vertices", "faces")]
     peer.warm()
-    start = time.perf_counter()
-    built = peer.build(vertices, faces)
-    record = {"build": time.perf_counter() - start, "sets": {}}
+    built, seconds, memory = measure_build(lambda: peer.build(vertices, faces))
+    if memory is not None:
+        memory["faces"] = int(len(faces))
+    record = {"build": seconds, "memory": memory, "sets": {}}
     if peer.has_signed and hasattr(peer, "prepare_signed"):
         start = time.perf_counter()
         peer.prepare_signed(built, data[sets[0]])
@@ -397,7 +601,10 @@ def child(name, data_path, threads, out_path):
     for label in sets:
         points = data[label]
         timing, answers[f"{label}.unsigned"] = measure(
-            lambda p: peer.distance(built, p, threads), points, whole="unsigned" in peer.rebuilds
+            lambda p: peer.distance(built, p, threads),
+            points,
+            whole="unsigned" in peer.rebuilds,
+            finish=peer.answers,
         )
         record["sets"][label] = {"unsigned": timing}
         if peer.has_signed:

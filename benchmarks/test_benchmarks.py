@@ -1,12 +1,14 @@
 """Tests of the benchmark's own code (``make test`` runs them from a clone).
 
-The summary never states an error where d* = 0 in ulps of 0; relative
-errors leave those rows out; the speed table states facts and the targets
-go to the checks; the mesh chart draws; the point-cloud benchmark runs and
-cleans up after itself; the mesh-pair benchmark's reference is the exact
-minimum over every pair of faces; the pair stability sweeps hold proximity's
-methods to their bounds, count junk witness points and sentinels as failures,
-and draw.
+The summary never states an error where d* = 0 in ulps of 0; relative errors
+leave those rows out; the speed table states facts and the targets go to the
+checks; the mesh chart draws, with a style for every peer; the mesh peers'
+checks judge the targets of the same run, or say which peer did not run; the
+peers' table shows each build's memory, measured as a build keeps and peaks;
+the point-cloud benchmark runs and cleans up after itself; the mesh-pair
+benchmark's reference is the exact minimum over every pair of faces; the
+pair stability sweeps hold proximity's methods to their bounds, count junk
+witness points and sentinels as failures, and draw.
 """
 
 import json
@@ -116,6 +118,8 @@ def test_the_mesh_chart_draws_from_the_peers_data(tmp_path):
                 "peers": {
                     "proximity": {"label": "proximity (robust)", "runs": run(1e6, 0.0)},
                     "open3d": {"label": "Open3D RaycastingScene", "runs": run(5e5, 1e-7, off=3)},
+                    "fcpw": {"label": "FCPW (wheel)", "runs": run(8e5, 6e-8)},
+                    "meshlib": {"label": "MeshLib findSignedDistances", "runs": run(7e5, 5e-8)},
                     "fcl": {"label": "python-fcl, per point", "runs": {"1": {"skipped": "not installed"}}},
                 },
             }
@@ -123,6 +127,13 @@ def test_the_mesh_chart_draws_from_the_peers_data(tmp_path):
     }
     path = charts.mesh_peers(raw, tmp_path / "mesh_peers.png")
     assert path.exists() and path.stat().st_size > 10_000
+
+
+def test_every_peer_has_a_style_of_its_own_in_the_mesh_chart():
+    from benchmarks import charts, peers
+
+    assert set(peers.PEERS) <= set(charts.PEER_STYLE)
+    assert len(set(charts.PEER_STYLE.values())) == len(charts.PEER_STYLE)
 
 
 def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
@@ -278,3 +289,111 @@ def test_junk_witness_points_are_failures_and_sentinels_are_not_distances():
     point_a[4] = np.nan
     failed = pair_stability._failures("triangle_triangle", scene, ref, distance, point_a, point_b)
     assert list(failed["NO_WITNESS"]) == [4]
+
+
+def _peers_raw(with_peers=True):
+    """A peers' run on the large icosphere and a 20k-face one; ``with_peers``: FCPW and Warp ran."""
+
+    def runs(build, near, box, kept=None, peak=None, faces=1, threads=("1", "2")):
+        memory = None
+        if kept is not None:
+            memory = {"faces": faces, "before_kib": 100, "kept_kib": kept * faces / 1024,
+                      "peak_kib": peak * faces / 1024}  # fmt: skip
+        sets = {"near": {"unsigned": {"qps": near}}, "box": {"unsigned": {"qps": box}}}
+        return {t: {"build": build * (2 if t == "1" else 1), "memory": memory, "sets": sets} for t in threads}
+
+    def entry(faces, peers):
+        return {"faces": faces, "size": 2.0, "peers": peers}
+
+    large = 1_310_720
+    big = {"proximity": {"label": "proximity (robust)", "threads": "parameter", "rebuilds": [],
+                         "runs": runs(0.4, 3e6, 1e6, kept=110, peak=260, faces=large)}}  # fmt: skip
+    small = {"proximity": {"label": "proximity (robust)", "threads": "parameter", "rebuilds": [],
+                           "runs": runs(0.01, 1.2e6, 5e5, kept=200, peak=300, faces=20_480)}}  # fmt: skip
+    if with_peers:
+        big["fcpw"] = {"label": "FCPW (wheel)", "threads": "affinity", "rebuilds": [],
+                       "runs": runs(0.5, 1e6, 4e5, kept=80, peak=100, faces=large)}  # fmt: skip
+        small["warp"] = {"label": "Warp (CPU)", "threads": "one", "rebuilds": [],
+                         "runs": runs(0.005, 1.5e6, 2e5, threads=("1",))}  # fmt: skip
+    return {
+        "meta": {"threads_all": 2},
+        "meshes": {
+            "icosphere, 1,310,720 faces": entry(large, big),
+            "icosphere, 20,480 faces": entry(20_480, small),
+        },
+    }
+
+
+def test_the_peers_checks_judge_the_targets_from_the_same_run():
+    from benchmarks import meshes
+
+    missed, lines = meshes.peers_checks(_peers_raw())
+    assert len(lines) == 6 and missed == 3
+    # 110 bytes per face kept (at most 120), a peak of 260 (at most 250).
+    assert lines[0].startswith("met     proximity's memory kept after the build, icosphere, 1,310,720 faces")
+    assert ": 110 bytes per face" in lines[0] and ": 260 bytes per face" in lines[1]
+    assert lines[1].startswith("MISSED  proximity's build peak, icosphere, 1,310,720 faces: 260")
+    # 3e6 / 1e6 points/s on one thread (at least 2.5x); a build of 0.4 s / 0.5 s on 2 threads (at most 0.7x).
+    assert lines[2].startswith("met     speed-up over FCPW's wheel") and "3.00x" in lines[2]
+    assert lines[3].startswith("MISSED  build time over FCPW's wheel's") and "0.80x" in lines[3]
+    # Near: 1.2e6 / 1.5e6 (below Warp), box: 5e5 / 2e5.
+    warp = "speed-up over Warp (CPU), icosphere, 20,480 faces"
+    assert lines[4].startswith(f"MISSED  {warp}, near") and "0.80x" in lines[4]
+    assert lines[5].startswith(f"met     {warp}, box") and "2.50x" in lines[5]
+
+
+def test_a_peers_check_whose_peer_or_mesh_did_not_run_says_so_and_is_not_missed():
+    from benchmarks import meshes
+
+    missed, lines = meshes.peers_checks(_peers_raw(with_peers=False))
+    assert missed == 1 and len(lines) == 6  # the build peak alone
+    assert [line.split()[0] for line in lines] == ["met", "MISSED", "n/a", "n/a", "n/a", "n/a"]
+    assert "FCPW did not run" in lines[2] and "Warp did not run" in lines[5]
+    raw = _peers_raw()
+    raw["meshes"] = {"torus, 20,000 faces": raw["meshes"].pop("icosphere, 20,480 faces")}
+    missed, lines = meshes.peers_checks(raw)
+    assert lines[0].startswith("n/a") and "1,310,720-face icosphere: that mesh is not in this run" in lines[0]
+    assert len(lines) == 3 and missed == 1
+
+
+def test_the_peers_table_shows_the_memory_of_each_build():
+    from benchmarks import meshes
+
+    raw = _peers_raw()
+    raw["meta"].update(points=1000, exact_sample=50, cpus=2, load_average=[(1.0, 1.0, 1.0)])
+    for entry in raw["meshes"].values():
+        for peer in entry["peers"].values():
+            peer["precision"] = "float64"
+            for run in peer["runs"].values():
+                for timing in run["sets"].values():
+                    timing["unsigned"]["errors"] = {"max_error": 0.0, "off": 0, "n": 1000}
+    small = raw["meshes"]["icosphere, 20,480 faces"]["peers"]
+    small["pcu"] = {"label": "point-cloud-utils", "precision": "float64", "threads": "environment",
+                    "rebuilds": ["unsigned", "signed"], "runs": small["warp"]["runs"]}  # fmt: skip
+    table = meshes.peers_markdown(raw).splitlines()
+    header = next(line for line in table if line.startswith("| unsigned"))
+    assert "| kept (B/face) | build peak (B/face) |" in header
+    row = next(line for line in table if line.startswith("| FCPW (wheel)"))
+    assert row.split(" | ")[2:5] == ["500", "80", "100"]  # build in ms (the 2-thread run), kept, peak
+    row = next(line for line in table if line.startswith("| point-cloud-utils"))
+    assert row.split(" | ")[3:5] == ["in every call", "in every call"]
+
+
+def test_a_build_keeps_what_it_returns_and_peaks_at_what_it_made():
+    import numpy as np
+    import pytest
+
+    from benchmarks import peers
+
+    if not peers.can_reset_peak():
+        pytest.skip("no /proc/self/clear_refs on this system: the peak cannot be reset")
+
+    def build():
+        scratch = np.ones(12_500_000)  # 100 MB, freed on return
+        return scratch[:1_250_000].copy()  # 10 MB kept
+
+    built, seconds, memory = peers.measure_build(build)
+    assert len(built) == 1_250_000 and seconds > 0
+    mib = 2**20 / 1024
+    assert 9 * mib <= memory["kept_kib"] <= 12 * mib
+    assert 100 * mib <= memory["peak_kib"] <= 115 * mib
