@@ -406,18 +406,24 @@ def _fit_indexed(vertices, faces, out, out_faces, bounds, top, tasks, start, end
 
 
 #: The steps of :func:`_fit_step`.
-_BOXES, _FRAMES = 0, 1
+_BOXES, _FRAMES, _MERGED = 0, 1, 2
+
+#: Nodes over at most this many primitives get exact slab ranges at a
+#: build (:func:`refit`); those above, their children's merged.
+EXACT_RANGES = 512
 
 
 @kernel(nogil=True)
-def _fit_step(step, lo, hi, bounds, start, end, child, count, kinds, params, cull, normals, vertices):
-    """One step of :func:`refit`; one kernel for both, so that a first build compiles one.
+def _fit_step(step, lo, hi, most, bounds, start, end, child, count, kinds, params, cull, normals, vertices):
+    """One step of :func:`refit`; one kernel for all, so that a first build compiles one.
 
     ``_BOXES``: every node's box and normal sum, and its range of stored
     primitives ``start[i] .. end[i] - 1``, from the last node back: the
     children of a node come after it (see :func:`~.build._build`), so they
-    are done first.  ``_FRAMES``: the frames and slab ranges of the nodes
-    ``lo .. hi - 1``.
+    are done first.  ``_FRAMES``: the frames and exact slab ranges of the
+    nodes ``lo .. hi - 1`` over at most ``most`` primitives.  ``_MERGED``:
+    the frames of the others, and their ranges from their children's
+    (:func:`_ranges_merged`), from the last node back.
     """
     if step == _BOXES:
         for i in range(child.shape[0] - 1, -1, -1):
@@ -429,10 +435,16 @@ def _fit_step(step, lo, hi, bounds, start, end, child, count, kinds, params, cul
                 start[i] = start[child[i]]
                 end[i] = end[child[i] + 1]
                 _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
-    else:
+    elif step == _FRAMES:
         for i in range(lo, hi):
-            _frame(bounds, i)
-            _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+            if end[i] - start[i] <= most:
+                _frame(bounds, i)
+                _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
+    else:
+        for i in range(child.shape[0] - 1, -1, -1):
+            if end[i] - start[i] > most:
+                _frame(bounds, i)
+                _ranges_merged(bounds, i, child)
 
 
 @kernel()
@@ -494,16 +506,20 @@ def refit(child, count, kinds, params, cull, normals=None):
     params = readonly(params, np.float64)
     cull, normals = readonly(cull, cull.dtype), readonly(normals, normals.dtype)
     tree = (start, end, child, count, kinds, params, cull, normals, _VERTICES)
-    _fit_step(_BOXES, 0, 0, bounds, *tree)
-    # A node's frame and ranges cost one pass over its primitives: ranges of
-    # nodes cut at about equal sums of those (the root alone may be one).
-    cost = np.cumsum(end - start)
+    most = EXACT_RANGES
+    _fit_step(_BOXES, 0, 0, most, bounds, *tree)
+    # A node's frame and exact ranges cost one pass over its primitives:
+    # ranges of nodes cut at about equal sums of those (the root alone may be one).
+    sizes = end - start
+    cost = np.cumsum(np.where(sizes <= most, sizes, 0))
     pieces = _FRAME_RANGES_PER_THREAD * _threads.current()
     cuts = np.searchsorted(cost, cost[-1] * np.arange(1, pieces) / pieces, side="right")
     cuts = np.unique(np.concatenate([[0], cuts, [m]]))
     _threads.spread(
-        lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], bounds, *tree), len(cuts) - 1
+        lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], most, bounds, *tree), len(cuts) - 1
     )
+    if sizes[0] > most:
+        _fit_step(_MERGED, 0, 0, most, bounds, *tree)
     return bounds
 
 
