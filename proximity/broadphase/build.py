@@ -22,7 +22,7 @@ from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, plane_row, primitive_cull, stored_cull
-from .refit import refit, refit_faces, refit_indexed
+from .refit import EXACT_RANGES, NODE_COLUMNS, fit_indexed, refit, refit_faces, refit_indexed
 from .tree import Tree
 
 LEAF_SIZE = 4
@@ -692,12 +692,35 @@ def build_tree(kinds, params, leaf_size=None):
     return assemble(kinds, params, index, indices(child), indices(count), depth, (tight, loose))
 
 
+def _fitted_faces(vertices, faces, kinds, index, child, count, depth):
+    """The :class:`Tree` of the faces ``faces[index]`` (leaf order) of
+    ``vertices`` over the nodes ``child``, ``count`` (more than one): the
+    faces read through their vertices (:func:`leaf_faces`), their cull rows
+    and the nodes' bounds computed from those (:func:`.refit.fit_indexed`),
+    without the faces' rows for more than a subtree at a time."""
+    rows, corners, sources = leaf_faces(vertices, faces, index)
+    wide = np.empty((len(corners), FACE_INDEX + 3), np.float32)
+    wide.view(np.int32)[:, FACE_INDEX:] = corners
+    del corners
+    bounds = empty(len(child), NODE_COLUMNS)
+    kinds, read = readonly(kinds, np.int8), readonly(wide.view(np.int32), np.int32)
+    fit_indexed(rows, read, wide, bounds, child, count, kinds, EXACT_RANGES)
+    bounds, cull = readonly(bounds, np.float64), readonly(wide, np.float32)
+    return Tree(
+        kinds=kinds, stored_params=None, index=index, child=child, count=count,
+        bounds=bounds, cull=cull, loose_bounds=bounds, loose_cull=cull, depth=int(depth), vertices=rows,
+        faces=readonly(wide.view(np.int32), np.int32), sources=sources,
+    )  # fmt: skip
+
+
 def build_faces(vertices, faces, kind, leaf_size=None):
     """:func:`build_tree` for the faces ``faces`` of ``vertices`` (indices into
     it), primitives of kind ``kind`` that are hulls of three points, without
     their parameters in the faces' order: the faces' boxes, slabs and
-    hashes come from the vertices in one pass, and their parameters are
-    gathered once, in leaf order, :data:`FACE_COLUMNS` wide."""
+    hashes come from the vertices in one pass; the tree reads its faces
+    through their vertices, and its nodes are fitted to them a subtree at
+    a time (:func:`_fitted_faces`).  A tree of one leaf gathers the faces'
+    rows, :data:`FACE_COLUMNS` wide, once, in leaf order."""
     check_size(len(faces), "faces")
     vertices = readonly(vertices, np.float64)
     faces = readonly(faces, np.int64)
@@ -709,6 +732,11 @@ def build_faces(vertices, faces, kind, leaf_size=None):
     if not _all_different(hashes):
         return build_tree(kinds, face_params(vertices, faces, width=FACE_COLUMNS), leaf_size)
     child, count, order, depth = _build(cull, default_leaf_size(n) if leaf_size is None else int(leaf_size))
+    if len(child) > 1:
+        del cull, hashes
+        index = indices(order)
+        del order
+        return _fitted_faces(vertices, faces, kinds, index, indices(child), indices(count), depth)
     # The float32 rows the tree keeps, and the float64 ones dropped before
     # the faces' rows are gathered and the nodes fitted (to the faces'
     # points), which halves the build's peak.

@@ -8,9 +8,7 @@ that read them, and why they never change an answer, are in
 import dataclasses
 import math
 
-import numba
 import numpy as np
-from numba import prange
 
 from .. import _pool, _threads, primitives
 from .._jit import inline, kernel, spliced
@@ -301,12 +299,12 @@ def _ranges_merged(bounds, i, child):
 
 
 @inline
-def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices, base):
+def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices, base, most):
     """Every node of the subtree at ``root``: boxes and normal sums from the
     leaves up, then, but for ``root`` itself, its frame, and its ranges:
-    exact for a leaf, from its children's above (:func:`_ranges_merged`),
-    children first.  Row ``k`` of ``kinds``, ``params`` and ``cull`` is
-    stored primitive ``base + k``."""
+    exact for a leaf and a node over at most ``most`` primitives, from its
+    children's above (:func:`_ranges_merged`), children first.  Row ``k``
+    of ``kinds``, ``params`` and ``cull`` is stored primitive ``base + k``."""
     nodes, n = _subtree_nodes(root, start, end, child, count)
     for t in range(n - 1, -1, -1):
         i = nodes[t]
@@ -319,16 +317,17 @@ def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, c
             end[i] = end[child[i] + 1]
             _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
     for t in range(n - 1, 0, -1):
-        _frame_and_ranges(bounds, nodes[t], start, end, child, count, kinds, params, cull, vertices, base)
+        i = nodes[t]
+        _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base, most)
 
 
 @inline
-def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base):
-    """Node ``i``'s frame, and its ranges: exact for a leaf (row ``k`` of
-    ``kinds``, ``params`` and ``cull`` is stored primitive ``base + k``), its
-    children's otherwise."""
+def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base, most):
+    """Node ``i``'s frame, and its ranges: exact for a leaf and a node over at
+    most ``most`` primitives (row ``k`` of ``kinds``, ``params`` and ``cull``
+    is stored primitive ``base + k``), its children's otherwise."""
     _frame(bounds, i)
-    if count[i] > 0:
+    if count[i] > 0 or end[i] - start[i] <= most:
         _ranges(bounds, i, start[i] - base, end[i] - base, kinds, params, cull, vertices)
     else:
         _ranges_merged(bounds, i, child)
@@ -374,43 +373,93 @@ def _indexed_rows(vertices, faces, first, last):
     return params, cull
 
 
-@kernel(parallel=True)
-def _fit_indexed(vertices, faces, out, out_faces, bounds, top, tasks, start, end, child, count, kinds, hull):
-    """:func:`refit_indexed`: each subtree's faces' rows computed, its cull
-    rows and vertex indices written, and its nodes fitted (ranges merged,
-    children first), one subtree per task; then the nodes above them.  The
-    faces' rows are held for one subtree at a time, while in cache."""
-    for j in prange(tasks.shape[0]):
-        root = tasks[j]
-        first, last = start[root], end[root]
-        params, cull = _indexed_rows(vertices, faces, first, last)
-        for k in range(first, last):
-            _stored_row(cull, k - first, out, k)
-            for v in range(FACE_INDEX, FACE_INDEX + 3):
-                out_faces[k, v] = faces[k, v]
-        rows = kinds[first:last]
-        _fit_subtree_merged(bounds, root, start, end, child, count, rows, params, cull, hull, first)
-    for t in range(top.shape[0] - 1, -1, -1):
-        _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
-    # The subtrees' roots once the nodes above have summed their normals
-    # (``_frame`` writes a node's axis over its sum), then the nodes above,
-    # children first.
-    for j in prange(tasks.shape[0]):
-        i = tasks[j]
-        first, last = (start[i], end[i]) if count[i] > 0 else (start[i], start[i])
-        params, cull = _indexed_rows(vertices, faces, first, last)
-        _frame_and_ranges(bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first)
-    params, cull = _indexed_rows(vertices, faces, 0, 0)
-    for t in range(top.shape[0] - 1, -1, -1):
-        _frame_and_ranges(bounds, top[t], start, end, child, count, kinds[:0], params, cull, hull, 0)
+#: The steps of :func:`_fit_indexed`.
+_SUBTREES, _ABOVE, _ROOTS, _TOP = 0, 1, 2, 3
+
+
+@kernel(nogil=True)
+def _fit_indexed(
+    step, lo, hi, most, vertices, faces, out, out_faces, bounds, top, tasks, start, end, child, count, kinds,
+    hull,
+):  # fmt: skip
+    """One step of :func:`fit_indexed`, whose docstring says what each does."""
+    if step == _SUBTREES:
+        for j in range(lo, hi):
+            root = tasks[j]
+            first, last = start[root], end[root]
+            params, cull = _indexed_rows(vertices, faces, first, last)
+            for k in range(first, last):
+                _stored_row(cull, k - first, out, k)
+                # The nodes' normal sums from the float32 normals the tree
+                # keeps, as :func:`refit` sums them (an unpickled tree's).
+                for a in range(6, 9):
+                    cull[k - first, a] = out[k, a]
+                for v in range(FACE_INDEX, FACE_INDEX + 3):
+                    out_faces[k, v] = faces[k, v]
+            rows = kinds[first:last]
+            _fit_subtree_merged(bounds, root, start, end, child, count, rows, params, cull, hull, first, most)
+    elif step == _ABOVE:
+        for t in range(top.shape[0] - 1, -1, -1):
+            _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
+    elif step == _ROOTS:
+        for j in range(lo, hi):
+            i = tasks[j]
+            exact = count[i] > 0 or end[i] - start[i] <= most
+            first, last = (start[i], end[i]) if exact else (start[i], start[i])
+            params, cull = _indexed_rows(vertices, faces, first, last)
+            _frame_and_ranges(
+                bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first, most
+            )
+    else:
+        # Nodes over more than REFIT_SUBTREE >= most primitives: merged ranges.
+        params, cull = _indexed_rows(vertices, faces, 0, 0)
+        for t in range(top.shape[0] - 1, -1, -1):
+            i = top[t]
+            _frame_and_ranges(bounds, i, start, end, child, count, kinds[:0], params, cull, hull, 0, most)
+
+
+#: Subtrees' roots per call of the roots' step of :func:`fit_indexed`.
+_ROOTS_CHUNK = 64
+
+
+def fit_indexed(vertices, faces, out, bounds, child, count, kinds, most):
+    """A tree of faces read through their vertices fitted: its cull rows
+    ``out`` (``(n, FACE_INDEX + 3)`` float32, the faces' vertex indices in
+    the last three columns, as ``faces``, a read-only int32 view of rows
+    like them, gives them) and its nodes' bounds ``bounds`` (``(m,
+    NODE_COLUMNS)``), from ``vertices`` (the tree's, in its order).
+
+    Each face's float64 row and cull row are computed from its vertices
+    (:func:`_indexed_rows`) for one subtree of at most
+    :data:`REFIT_SUBTREE` faces at a time, the cull row written in float32
+    (:func:`.bounds.stored_cull`'s rounding) beside the indices, and the
+    subtree's nodes fitted while its rows are in cache, on the threads
+    (``_SUBTREES``); then the boxes and normal sums of the nodes above the
+    subtrees (``_ABOVE``), the subtrees' roots' frames and ranges
+    (``_ROOTS``: a root's frame overwrites its sum, which the nodes above
+    read first) and the nodes above (``_TOP``, children first).  Slab
+    ranges are exact for the leaves and the nodes over at most ``most``
+    faces (at most :data:`REFIT_SUBTREE`), merged from the children's above
+    (see :func:`refit_indexed`).
+    """
+    top, tasks, start, end = _tasks(child, count)
+    args = (most, vertices, faces, out, out.view(np.int32), bounds, top, tasks, start, end, child, count)
+    args = (*args, kinds, _VERTICES)
+    _threads.spread(lambda lo, hi: _fit_indexed(_SUBTREES, lo, hi, *args), len(tasks))
+    _fit_indexed(_ABOVE, 0, 0, *args)
+    _threads.spread(lambda lo, hi: _fit_indexed(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
+    _fit_indexed(_TOP, 0, 0, *args)
+    return bounds
 
 
 #: The steps of :func:`_fit_step`.
 _BOXES, _FRAMES, _MERGED = 0, 1, 2
 
 #: Nodes over at most this many primitives get exact slab ranges at a
-#: build (:func:`refit`); those above, their children's merged.
+#: build (:func:`refit`, :func:`fit_indexed`); those above, their
+#: children's merged.
 EXACT_RANGES = 512
+assert EXACT_RANGES <= REFIT_SUBTREE
 
 
 @kernel(nogil=True)
@@ -421,9 +470,9 @@ def _fit_step(step, lo, hi, most, bounds, start, end, child, count, kinds, param
     primitives ``start[i] .. end[i] - 1``, from the last node back: the
     children of a node come after it (see :func:`~.build._build`), so they
     are done first.  ``_FRAMES``: the frames and exact slab ranges of the
-    nodes ``lo .. hi - 1`` over at most ``most`` primitives.  ``_MERGED``:
-    the frames of the others, and their ranges from their children's
-    (:func:`_ranges_merged`), from the last node back.
+    leaves and nodes ``lo .. hi - 1`` over at most ``most`` primitives.
+    ``_MERGED``: the frames of the other nodes, and their ranges from their
+    children's (:func:`_ranges_merged`), from the last node back.
     """
     if step == _BOXES:
         for i in range(child.shape[0] - 1, -1, -1):
@@ -437,12 +486,12 @@ def _fit_step(step, lo, hi, most, bounds, start, end, child, count, kinds, param
                 _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
     elif step == _FRAMES:
         for i in range(lo, hi):
-            if end[i] - start[i] <= most:
+            if count[i] > 0 or end[i] - start[i] <= most:
                 _frame(bounds, i)
                 _ranges(bounds, i, start[i], end[i], kinds, params, cull, vertices)
     else:
         for i in range(child.shape[0] - 1, -1, -1):
-            if end[i] - start[i] > most:
+            if count[i] == 0 and end[i] - start[i] > most:
                 _frame(bounds, i)
                 _ranges_merged(bounds, i, child)
 
@@ -511,14 +560,14 @@ def refit(child, count, kinds, params, cull, normals=None):
     # A node's frame and exact ranges cost one pass over its primitives:
     # ranges of nodes cut at about equal sums of those (the root alone may be one).
     sizes = end - start
-    cost = np.cumsum(np.where(sizes <= most, sizes, 0))
+    cost = np.cumsum(np.where((count > 0) | (sizes <= most), sizes, 0))
     pieces = _FRAME_RANGES_PER_THREAD * _threads.current()
     cuts = np.searchsorted(cost, cost[-1] * np.arange(1, pieces) / pieces, side="right")
     cuts = np.unique(np.concatenate([[0], cuts, [m]]))
     _threads.spread(
         lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], most, bounds, *tree), len(cuts) - 1
     )
-    if sizes[0] > most:
+    if count[0] == 0 and sizes[0] > most:
         _fit_step(_MERGED, 0, 0, most, bounds, *tree)
     return bounds
 
@@ -582,14 +631,9 @@ def refit_indexed(vertices, tree):
     rows = _pool.empty((len(sources), 3))
     take_rows_into(readonly(vertices, np.float64), sources, rows)
     faces = _pool.empty(tree.faces.shape, np.float32)
-    child, count = tree.child, tree.count
-    bounds = _pool.empty((len(child), NODE_COLUMNS))
-    top, tasks, start, end = _tasks(child, count)
-    with numba.parallel_chunksize(1):
-        _fit_indexed(
-            rows, tree.faces, faces, faces.view(np.int32), bounds, top, tasks, start, end, child, count,
-            tree.kinds, _VERTICES,
-        )  # fmt: skip
+    bounds = _pool.empty((len(tree.child), NODE_COLUMNS))
+    rows = readonly(rows, np.float64)
+    fit_indexed(rows, tree.faces, faces, bounds, tree.child, tree.count, tree.kinds, 0)
     faces = readonly(faces, np.float32)
     bounds = readonly(bounds, np.float64)
     return dataclasses.replace(
@@ -598,6 +642,6 @@ def refit_indexed(vertices, tree):
         cull=faces,
         loose_bounds=bounds,
         loose_cull=faces,
-        vertices=readonly(rows, np.float64),
+        vertices=rows,
         faces=readonly(faces.view(np.int32), np.int32),
     )
