@@ -3,7 +3,13 @@
 The traversal visits the nearer child first and skips a node when a lower
 bound on the distance from the point to what it holds exceeds the best
 answer so far plus a slack (:mod:`.bounds` shows why that never changes the
-answer).  It is compiled per method and per set of kinds stored: the
+answer).  "Nearer" is by the children's axis-aligned boxes, the larger
+bound (with the oriented box) breaking ties: over a curved surface the
+oriented box of a patch that turns away from the point is nearer than
+that of the patch under it (its plane passes closer), so the larger bound
+sent the search to the wrong side first.  The order changes only which
+primitives are evaluated, never the answer (the least distance, ties to
+the lowest index).  It is compiled per method and per set of kinds stored: the
 method's query of each kind's rows (``row_query`` of its kernel module, see
 :mod:`proximity.primitives`) is bound into it, and nothing else compiles.
 
@@ -162,13 +168,16 @@ def _descend(
             left = np.int64(child[node])  # node numbers in int64: the bounds' tests compile once
             right = left + 1
             # The oriented box only where the box alone does not prune.
-            dl = _box_sqr(bounds, left, s, qx, qy, qz)
+            bl = _box_sqr(bounds, left, s, qx, qy, qz)
+            dl = bl
             if dl <= limit:
                 dl = max(dl, _slabs_sqr(bounds, left, s, qx, qy, qz))
-            dr = _box_sqr(bounds, right, s, qx, qy, qz)
+            br = _box_sqr(bounds, right, s, qx, qy, qz)
+            dr = br
             if dr <= limit:
                 dr = max(dr, _slabs_sqr(bounds, right, s, qx, qy, qz))
-            if dr < dl:
+            # The nearer box first (see the module docstring); inside both, the nearer bound.
+            if br < bl or (br == bl and dr < dl):
                 left, right, dl, dr = right, left, dr, dl
             if dl <= limit:
                 if dr <= limit:
@@ -176,6 +185,8 @@ def _descend(
                     stack_sqr[sp] = dr
                     sp += 1
                 node = left
+            elif dr <= limit:  # ordered by the boxes, the far one may be the one left
+                node = right
             else:
                 node = -1
         if node < 0:
