@@ -7,8 +7,9 @@ poses) costs O(instances): the boxes of the prototypes' roots, moved.
 
 A query bounds each instance's distance from below by the larger of the
 distances to its world box and to its bounding sphere (the sphere of the
-prototype about its root box's centre, through the farthest corner of its
-leaves' boxes: unlike the box, it does not grow when the instance turns).
+prototype about its root box's centre, :meth:`.tree.Tree.sphere`, through
+the farthest of a mesh's vertices or of the corners of its leaves' boxes:
+unlike the box, it does not grow when the instance turns).
 It then visits the instances nearest first by that bound, moves the point
 into each one's frame (``R^T (P - t)``, summed as
 :func:`proximity.posed.to_local` sums it) and runs the prototype's search
