@@ -103,6 +103,7 @@ from ._loops import (
 from .features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 from .methods import CERTIFIED
 from .point_segment import project
+from .primitives import LANE_OUT, LANES
 
 # The least square of the normal with which the face is a candidate (see the
 # module docstring): above it no term of the face test that matters is
@@ -716,6 +717,49 @@ def _row(kind, q, k, px, py, pz):
     x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, k)
     st, d, sqr, x, y, z, f, b0, b1, b2 = ROW_QUERY(x0, y0, z0, x1, y1, z1, x2, y2, z2, px, py, pz)
     return st, d, sqr, x, y, z, f, b0, b1, b2, False
+
+
+def _robust_rows(q, ks, n, px, py, pz, z):
+    """The robust answers of stored rows ``ks[:n]`` of ``q`` to ``P``
+    (``row_batch``, see :mod:`proximity.primitives`), as :func:`_robust_block`
+    answers a block: a loop over every lane that compiles to SIMD code (the
+    last row again in the lanes beyond ``n``), the window's check in row
+    ``LANE_OUT + 9``, then the rows outside the safe window again on the
+    scalar path.  The same bits as :func:`robust`, lane by lane."""
+    for j in range(LANES):
+        x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, ks[min(j, n - 1)])
+        z[0, j], z[1, j], z[2, j], z[3, j], z[4, j] = x0, y0, z0, x1, y1
+        z[5, j], z[6, j], z[7, j], z[8, j] = z1, x2, y2, z2
+    for j in range(LANES):
+        v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z = _lane_corners(z, j)
+        ax, ay, az = v0x - px, v0y - py, v0z - pz
+        bx, by, bz = v1x - px, v1y - py, v1z - pz
+        cx, cy, cz = v2x - px, v2y - py, v2z - pz
+        _, ok = _window(ax, ay, az, bx, by, bz, cx, cy, cz)
+        res = _finish(
+            _robust_local(ax, ay, az, bx, by, bz, cx, cy, cz),
+            UNSCALED, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
+        )  # fmt: skip
+        store(z, LANE_OUT, j, res)
+        z[LANE_OUT + 9, j] = ok
+    for j in range(n):
+        if z[LANE_OUT + 9, j] == 0.0:
+            v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z = _lane_corners(z, j)
+            store(z, LANE_OUT, j, robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz))
+
+
+@inline
+def _lane_corners(z, j):
+    return z[0, j], z[1, j], z[2, j], z[3, j], z[4, j], z[5, j], z[6, j], z[7, j], z[8, j]
+
+
+def row_batch(primitive, method, indexed=False):
+    """:func:`_robust_rows` for ``robust`` (None for the other methods), of
+    stored rows or, ``indexed``, of faces read through their vertices."""
+    if method.name != "robust":
+        return None
+    tag = "indexed" if indexed else "rows"
+    return specialize(_robust_rows, tag, role="inline", CORNERS=_corners(indexed))
 
 
 def _corners(indexed):

@@ -45,6 +45,7 @@ from numba.core import types
 
 from .. import primitives
 from .._jit import launcher, part, specialize
+from ..primitives import LANE_ROWS, LANES
 from ._alloc import indices, readonly
 from .bounds import CULL_COLUMNS
 from .traverse import (
@@ -114,6 +115,8 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
+    lanes = np.empty(LANES, np.int64)
+    z = np.empty((LANE_ROWS, LANES))
     lower = np.empty(m)
     visit = np.empty(m, np.int64)
     pick = np.empty(m, np.int64)
@@ -191,7 +194,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                 )  # fmt: skip
                 nan = math.nan
                 state = DESCEND(
-                    forest, roots[proto], stack_node, stack_sqr, magnitudes[proto],
+                    forest, roots[proto], stack_node, stack_sqr, lanes, z, magnitudes[proto],
                     lx, ly, lz, cap, nan, nan, nan, inst.offset[a], state,
                 )  # fmt: skip
                 best, best_index, best_k, upper, lowest = state[:5]

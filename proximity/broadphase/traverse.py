@@ -33,6 +33,7 @@ from numba.core import types
 from .. import certified
 from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
+from ..primitives import LANE_OUT, LANE_ROWS, LANES
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per block function call
@@ -90,8 +91,11 @@ _SIGNATURES = {False: _signatures(_TREE), True: _signatures(_INDEXED_TREE)}
 # Bound per method and set of kinds by :func:`proximity._jit.specialize`:
 # the primitives' evaluation and interval (chains over the kinds, see
 # :func:`_chain`), whether the method has an exact fallback, and whether the
-# previous point's answer may seed the search.
-EVALUATE = INTERVAL = DESCEND = None
+# previous point's answer may seed the search; where a tree of one kind
+# answers several rows side by side (its kernel module's ``row_batch``, see
+# :mod:`proximity.primitives`), ``BATCH`` and that function, ``ROWS``.
+EVALUATE = INTERVAL = DESCEND = ROWS = None
+BATCH = False
 EXACT_FALLBACK = False
 SEED_POINT = True
 # The column of the rows' radii where the tree holds rounded primitives
@@ -103,9 +107,20 @@ LOW = HIGH = 0
 ROW = NEXT = CALL = None
 
 
+@inline
+def _lane(z, j):
+    """The answer in column ``j`` of a batch's scratch ``z`` (see :mod:`proximity.primitives`)."""
+    o = LANE_OUT
+    return (
+        z[o, j], z[o + 1, j], z[o + 2, j], z[o + 3, j], z[o + 4, j],
+        z[o + 5, j], z[o + 6, j], z[o + 7, j], z[o + 8, j],
+    )  # fmt: skip
+
+
 def _descend(
-    tree, root, stack_node, stack_sqr, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset, state
-):
+    tree, root, stack_node, stack_sqr, lanes, z, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset,
+    state,
+):  # fmt: skip
     """Search ``tree`` from node ``root`` for the point ``P`` (finite), updating ``state``.
 
     ``state`` is the best answer so far: ``(best, best_index, best_k, upper,
@@ -113,7 +128,9 @@ def _descend(
     :func:`_search_block` keeps it; nothing beyond ``min(best, cap)`` (and the
     previous closest point ``near``, unless NaN) is visited.  ``offset`` is
     added to the tree's primitive indices (the instances of a scene number
-    their primitives after each other's).
+    their primitives after each other's).  ``stack_node`` and ``stack_sqr``
+    hold ``depth + 1`` entries, ``lanes`` :data:`~proximity.primitives.LANES`
+    and ``z`` is ``(LANE_ROWS, LANES)``: scratch, allocated once per block.
     """
     kinds, params, index, cull, bounds, child, count = tree
     best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state
@@ -130,39 +147,65 @@ def _descend(
     while True:
         first, c = child[node], count[node]
         if c > 0:
-            for k in range(first, first + c):
-                if _culled(cull, k, s, qx, qy, qz, reach):
-                    continue
-                r = EVALUATE(kinds, params, k, px, py, pz)
-                if RADIUS >= 0:
-                    # A rounded primitive: d - R, ranked signed (negative inside).
-                    r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
-                certain = True
-                if EXACT_FALLBACK:
-                    if r[0] != certified.CERTAIN:
-                        certain = False
-                        lo, hi = INTERVAL(kinds, params, k, px, py, pz)
-                        if RADIUS >= 0:
-                            lo, hi = _less(lo, hi, params[k, RADIUS])
-                        lowest = min(lowest, lo)
-                        upper = min(upper, hi)
-                if certain:
-                    d = r[1]
-                    idx = index[k] + offset
-                    if d < best or (d == best and idx < best_index):
-                        best = d
-                        best_index = idx
-                        best_k = k
-                        w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
-                        w_feature = r[6]
-                        w_a0, w_a1, w_a2 = r[7], r[8], r[9]
-                        w_flag = r[10]
-                if RADIUS >= 0:
-                    # The best may be negative (inside a rounded primitive).
-                    reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
-                else:
+            if BATCH:
+                # The leaf's rows LANES at a time, answered side by side:
+                # those that the reach at the start of each group leaves.
+                k, end = first, first + c
+                while k < end:
+                    n = 0
+                    while k < end and n < LANES:
+                        if not _culled(cull, k, s, qx, qy, qz, reach):
+                            lanes[n] = k
+                            n += 1
+                        k += 1
+                    if n == 0:
+                        break
+                    ROWS(params, lanes, n, px, py, pz, z)
+                    for j in range(n):
+                        d, sqr, x, y, zz, f, a0, a1, a2 = _lane(z, j)
+                        idx = index[lanes[j]] + offset
+                        if d < best or (d == best and idx < best_index):
+                            best = d
+                            best_index = idx
+                            best_k = lanes[j]
+                            w_sqr, w_x, w_y, w_z, w_feature = sqr, x, y, zz, int(f)
+                            w_a0, w_a1, w_a2, w_flag = a0, a1, a2, False
                     reach = min(min(best, upper) * s, cap) + SLACK
-                limit = reach * reach
+                    limit = reach * reach
+            else:
+                for k in range(first, first + c):
+                    if _culled(cull, k, s, qx, qy, qz, reach):
+                        continue
+                    r = EVALUATE(kinds, params, k, px, py, pz)
+                    if RADIUS >= 0:
+                        # A rounded primitive: d - R, ranked signed (negative inside).
+                        r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
+                    certain = True
+                    if EXACT_FALLBACK:
+                        if r[0] != certified.CERTAIN:
+                            certain = False
+                            lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                            if RADIUS >= 0:
+                                lo, hi = _less(lo, hi, params[k, RADIUS])
+                            lowest = min(lowest, lo)
+                            upper = min(upper, hi)
+                    if certain:
+                        d = r[1]
+                        idx = index[k] + offset
+                        if d < best or (d == best and idx < best_index):
+                            best = d
+                            best_index = idx
+                            best_k = k
+                            w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                            w_feature = r[6]
+                            w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                            w_flag = r[10]
+                    if RADIUS >= 0:
+                        # The best may be negative (inside a rounded primitive).
+                        reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
+                    else:
+                        reach = min(min(best, upper) * s, cap) + SLACK
+                    limit = reach * reach
             node = -1
         else:
             left = np.int64(child[node])  # node numbers in int64: the bounds' tests compile once
@@ -231,6 +274,8 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
     sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
+    lanes = np.empty(LANES, np.int64)
+    z = np.empty((LANE_ROWS, LANES))
     # The previous point's closest point, a point of the collection: points
     # are visited in spatial order, so the distance to it is an upper bound
     # on the next point's answer that prunes from the root down.
@@ -253,7 +298,9 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
                 w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag,
             )  # fmt: skip
             near = (near_x, near_y, near_z)
-            state = DESCEND(tree, 0, stack_node, stack_sqr, magnitude, px, py, pz, cutoff, *near, 0, state)
+            state = DESCEND(
+                tree, 0, stack_node, stack_sqr, lanes, z, magnitude, px, py, pz, cutoff, *near, 0, state
+            )  # fmt: skip
             best, best_index, best_k, upper, lowest = state[:5]
             w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
         if best_k >= 0:
@@ -375,10 +422,18 @@ def descent(method, present, radius=-1, indexed=False):
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     # Only the triangle reads its rows through vertices: the other kinds keep the one signature.
     layout = {"indexed": True} if indexed else {}
+    # Rows side by side only in a tree of one kind whose module offers it
+    # for the method (its answers are then always certain), unrounded.
+    rows = None
+    if len(present) == 1 and radius < 0:
+        batch = getattr(present[0].kernels, "row_batch", None)
+        rows = batch(present[0], method, **layout) if batch is not None else None
     return specialize(
         _descend,
         f"{tag}__{names}",
         role="inline",
+        BATCH=rows is not None,
+        ROWS=rows,
         EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method, **layout), tag),
         INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p, **layout), "interval" + suffix),
         EXACT_FALLBACK=method.exact_fallback,
