@@ -13,6 +13,15 @@ the lowest index).  It is compiled per method and per set of kinds stored: the
 method's query of each kind's rows (``row_query`` of its kernel module, see
 :mod:`proximity.primitives`) is bound into it, and nothing else compiles.
 
+Where the tree holds one kind whose module answers rows side by side for
+the method (``row_batch``: the triangle's, for ``robust``), a leaf's rows
+are answered :data:`~proximity.primitives.LANES` at a time, by a loop
+that compiles to SIMD code, with the bits of ``row_query``: a leaf of at
+most that many rows whole, without the rows' own cull tests, a larger one
+in groups of the rows those tests leave.  Rows a test would have skipped
+only add answers that cannot win (:mod:`.bounds`), so the answer is the
+same; the cutoff is applied to the answer, as without them.
+
 Certified
 ---------
 Where the certified filter leaves a primitive's answer to its exact
@@ -148,13 +157,15 @@ def _descend(
         first, c = child[node], count[node]
         if c > 0:
             if BATCH:
-                # The leaf's rows LANES at a time, answered side by side:
-                # those that the reach at the start of each group leaves.
+                # The leaf's rows LANES at a time, answered side by side: a
+                # leaf of up to LANES whole (the one pass costs about what
+                # their cull tests would), a larger one in groups of the rows
+                # that the reach at the start of each group leaves.
                 k, end = first, first + c
                 while k < end:
                     n = 0
                     while k < end and n < LANES:
-                        if not _culled(cull, k, s, qx, qy, qz, reach):
+                        if c <= LANES or not _culled(cull, k, s, qx, qy, qz, reach):
                             lanes[n] = k
                             n += 1
                         k += 1
