@@ -32,9 +32,10 @@ and, where it can, for a method whose answers are always certain:
     The query of up to :data:`LANES` stored rows side by side (SIMD), or
     None: ``(params, rows, n, px, py, pz, z)`` answers rows ``rows[:n]``,
     writing row ``rows[j]``'s ``(distance, sqr_distance, x, y, z, feature,
-    a0, a1, a2)`` to ``z[LANE_OUT:LANE_OUT + 9, j]`` (``z`` is ``(LANE_ROWS,
-    LANES)`` scratch), the same bits as ``row_query``.  The search of a tree
-    of that kind alone evaluates its leaves' rows this way.
+    a0, a1, a2)`` to column ``j`` of rows ``PAIR_OUT ..`` of ``z``, scratch
+    laid out as a batch block's (``_loops.PAIR_ROWS`` rows, ``LANES``
+    columns); the same bits as ``row_query``.  The search of a tree of that
+    kind alone evaluates its leaves' rows this way.
 """
 
 from dataclasses import dataclass
@@ -47,10 +48,6 @@ from . import _lazy
 #: the width of the vector units' float64 lanes on current x86 (AVX2), and
 #: of the leaves of most trees.
 LANES = 4
-#: The scratch of a ``row_batch``: nine rows for the kernel's own use, then the
-#: nine answers (from row :data:`LANE_OUT`), then one more.
-LANE_ROWS = 19
-LANE_OUT = 9
 
 __all__ = [
     "BY_CODE",

@@ -45,7 +45,8 @@ from numba.core import types
 
 from .. import primitives
 from .._jit import launcher, part, specialize
-from ..primitives import LANE_ROWS, LANES
+from .._loops import PAIR_ROWS
+from ..primitives import LANES
 from ._alloc import indices, readonly
 from .bounds import CULL_COLUMNS
 from .traverse import (
@@ -116,7 +117,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     lanes = np.empty(LANES, np.int64)
-    z = np.empty((LANE_ROWS, LANES))
+    z = np.empty((PAIR_ROWS, LANES))
     lower = np.empty(m)
     visit = np.empty(m, np.int64)
     pick = np.empty(m, np.int64)

@@ -42,7 +42,8 @@ from numba.core import types
 from .. import certified
 from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
-from ..primitives import LANE_OUT, LANE_ROWS, LANES
+from .._loops import PAIR_OUT, PAIR_ROWS
+from ..primitives import LANES
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per block function call
@@ -119,7 +120,7 @@ ROW = NEXT = CALL = None
 @inline
 def _lane(z, j):
     """The answer in column ``j`` of a batch's scratch ``z`` (see :mod:`proximity.primitives`)."""
-    o = LANE_OUT
+    o = PAIR_OUT
     return (
         z[o, j], z[o + 1, j], z[o + 2, j], z[o + 3, j], z[o + 4, j],
         z[o + 5, j], z[o + 6, j], z[o + 7, j], z[o + 8, j],
@@ -139,7 +140,7 @@ def _descend(
     added to the tree's primitive indices (the instances of a scene number
     their primitives after each other's).  ``stack_node`` and ``stack_sqr``
     hold ``depth + 1`` entries, ``lanes`` :data:`~proximity.primitives.LANES`
-    and ``z`` is ``(LANE_ROWS, LANES)``: scratch, allocated once per block.
+    and ``z`` is ``(PAIR_ROWS, LANES)``: scratch, allocated once per block.
     """
     kinds, params, index, cull, bounds, child, count = tree
     best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state
@@ -286,7 +287,7 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
     lanes = np.empty(LANES, np.int64)
-    z = np.empty((LANE_ROWS, LANES))
+    z = np.empty((PAIR_ROWS, LANES))
     # The previous point's closest point, a point of the collection: points
     # are visited in spatial order, so the distance to it is an upper bound
     # on the next point's answer that prunes from the root down.
