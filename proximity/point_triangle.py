@@ -92,6 +92,7 @@ from ._loops import (
     ONE_ROWS,
     PAIR_OK,
     PAIR_OUT,
+    PAIR_P,
     PAIR_ROWS,
     gather_points,
     gather_triangles,
@@ -103,6 +104,7 @@ from ._loops import (
 from .features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 from .methods import CERTIFIED
 from .point_segment import project
+from .primitives import LANES
 
 # The least square of the normal with which the face is a candidate (see the
 # module docstring): above it no term of the face test that matters is
@@ -551,18 +553,13 @@ def exact_row(row, vertices, point):
 _NAN_ROW = (math.nan, math.nan, math.nan, math.nan, math.nan, NONE, math.nan, math.nan, math.nan)
 
 
-@part
-def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
-    """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`.
-
-    Gathered into local scratch (the rows of ``PAIR_*``), computed by a loop
-    that compiles to SIMD code (with, in row ``PAIR_OK``, whether the query
-    was in the safe window), then redone one by one on the scalar path where
-    it was not, and scattered to the outputs.
-    """
-    z = np.empty((PAIR_ROWS, BLOCK))
-    gather_triangles(z, shape.vertices, P, n_j, k0, nb)
-    for q in range(BLOCK):
+@inline
+def _robust_lanes(z, width, n):
+    """Robust queries of columns ``0 .. width - 1`` of the scratch ``z`` (the
+    rows of ``PAIR_*``), computed by a loop that compiles to SIMD code (with,
+    in row ``PAIR_OK``, whether the query was in the safe window), then those
+    of the first ``n`` that were not redone one by one on the scalar path."""
+    for q in range(width):
         v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         ax, ay, az = v0x - px, v0y - py, v0z - pz
         bx, by, bz = v1x - px, v1y - py, v1z - pz
@@ -574,7 +571,7 @@ def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
         )  # fmt: skip
         store(z, PAIR_OUT, q, res)
         z[PAIR_OK, q] = ok
-    for q in range(nb):
+    for q in range(n):
         if z[PAIR_OK, q] != 0.0:
             continue
         v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
@@ -583,6 +580,15 @@ def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
             store(z, PAIR_OUT, q, res)
         else:
             store(z, PAIR_OUT, q, _NAN_ROW)
+
+
+@part
+def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
+    """Robust queries ``k0 .. k0 + nb`` of :func:`_batch`: gathered into local
+    scratch, answered by :func:`_robust_lanes`, and scattered to the outputs."""
+    z = np.empty((PAIR_ROWS, BLOCK))
+    gather_triangles(z, shape.vertices, P, n_j, k0, nb)
+    _robust_lanes(z, BLOCK, nb)
     scatter_triangles(z, PAIR_OUT, k0, nb, out, full)
 
 
@@ -619,22 +625,9 @@ def _eberly_block(shape, P, n_j, k0, nb, out, exact, full):
     for q in range(BLOCK):
         v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz = triangle_at(z, q)
         res = _eberly_point(
-            v0x,
-            v0y,
-            v0z,
-            v1x,
-            v1y,
-            v1z,
-            v2x,
-            v2y,
-            v2z,
-            px,
-            py,
-            pz,
-            z[_CHOICE, q],
-            z[_CHOICE + 1, q],
-            z[_CHOICE + 2, q],
-        )
+            v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz,
+            z[_CHOICE, q], z[_CHOICE + 1, q], z[_CHOICE + 2, q],
+        )  # fmt: skip
         store(z, PAIR_OUT, q, res)
         z[PAIR_OK, q] = math.isfinite(px) & math.isfinite(py) & math.isfinite(pz)
     for q in range(nb):
@@ -716,6 +709,23 @@ def _row(kind, q, k, px, py, pz):
     x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, k)
     st, d, sqr, x, y, z, f, b0, b1, b2 = ROW_QUERY(x0, y0, z0, x1, y1, z1, x2, y2, z2, px, py, pz)
     return st, d, sqr, x, y, z, f, b0, b1, b2, False
+
+
+def _robust_rows(q, ks, n, px, py, pz, z):
+    """Stored rows ``ks[:n]`` of ``q`` and ``P`` by :func:`_robust_lanes` (the last
+    row again beyond ``n``): ``row_batch``, see :mod:`proximity.primitives`."""
+    for j in range(LANES):
+        x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, ks[min(j, n - 1)])
+        z[0, j], z[1, j], z[2, j], z[3, j], z[4, j], z[5, j] = x0, y0, z0, x1, y1, z1
+        z[6, j], z[7, j], z[8, j], z[PAIR_P, j], z[PAIR_P + 1, j], z[PAIR_P + 2, j] = x2, y2, z2, px, py, pz
+    _robust_lanes(z, LANES, n)
+
+
+def row_batch(primitive, method, indexed=False):
+    """:func:`_robust_rows` for ``robust`` (None for the other methods)."""
+    if method.name == "robust":
+        tag = "indexed" if indexed else "rows"
+        return specialize(_robust_rows, tag, role="inline", CORNERS=_corners(indexed))
 
 
 def _corners(indexed):

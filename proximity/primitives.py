@@ -25,6 +25,17 @@ use, provides for every method:
     the looser boxes of the ``eberly`` method where they differ.
 ``resolve(code, params, point)``
     The certified answers of rows, exact fallback included, as arrays.
+
+and, where it can, for a method whose answers are always certain:
+
+``row_batch(primitive, method, indexed=False)``
+    The query of up to :data:`LANES` stored rows side by side (SIMD), or
+    None: ``(params, rows, n, px, py, pz, z)`` answers rows ``rows[:n]``,
+    writing row ``rows[j]``'s ``(distance, sqr_distance, x, y, z, feature,
+    a0, a1, a2)`` to column ``j`` of rows ``PAIR_OUT ..`` of ``z``, scratch
+    laid out as a batch block's (``_loops.PAIR_ROWS`` rows, ``LANES``
+    columns); the same bits as ``row_query``.  The search of a tree of that
+    kind alone evaluates its leaves' rows this way.
 """
 
 from dataclasses import dataclass
@@ -32,6 +43,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _lazy
+
+#: Rows answered side by side by a ``row_batch`` (see the module docstring):
+#: the width of the vector units' float64 lanes on current x86 (AVX2), and
+#: of the leaves of most trees.
+LANES = 4
 
 __all__ = [
     "BY_CODE",

@@ -118,6 +118,43 @@ def test_a_large_hierarchy_answers_as_brute_force_for_any_leaf_size(leaf_size):
         np.testing.assert_array_equal(ours[field], theirs[field], err_msg=field)
 
 
+@pytest.mark.parametrize("leaf_size", [1, 3, broadphase.LEAF_SIZE, build_module.LARGE_LEAF_SIZE, 13, None])
+def test_leaves_answered_side_by_side_answer_as_each_face_alone(leaf_size):
+    """The robust search answers a leaf's faces ``LANES`` at a time (a kernel
+    module's ``row_batch``), the faces whose differences from the point leave
+    the safe window again on the scalar path: triangles of every size from
+    1e-200 to 1 around the origin, and points at every such distance, so
+    that one group of faces holds both; leaves of any size (None: one leaf,
+    brute force), faces from rows or read through their vertices."""
+    from proximity._fp import SAFE_MIN
+
+    rng = np.random.default_rng(17)
+    scales = 10.0 ** rng.uniform(-200, 0, (400, 1))
+    corners = scales[:160, None] * rng.normal(size=(160, 3, 3))
+    points = scales[160:] * rng.normal(size=(240, 3))
+    per_face = proximity.Triangle(corners).closest_point(points[:, None, :])
+    face = np.argmin(per_face.distance, axis=1)  # the first of equal distances
+    rows = np.arange(len(points))
+    # Both sides of the window among the answers.
+    m = np.abs(corners[face] - points[:, None, :]).max(axis=(1, 2))
+    assert (m < SAFE_MIN).sum() > 10 and (m >= SAFE_MIN).sum() > 10
+    kinds, params = np.zeros(len(corners), np.int8), corners.reshape(-1, 9)
+    method = proximity.methods.resolve("robust")
+    if leaf_size is None:
+        tree, broad_phase = broadphase.brute(kinds, params), "brute"
+    else:
+        tree, broad_phase = broadphase.build_tree(kinds, params, leaf_size), "bvh"
+    ours = broadphase.nearest(tree, method, points, True)
+    vertices, faces = corners.reshape(-1, 3), np.arange(3 * len(corners)).reshape(-1, 3)
+    mesh = TriangleMesh(vertices, faces, broad_phase=broad_phase).closest_point(points)
+    for field, name in (("distance",) * 2, ("point",) * 2, ("feature",) * 2, ("extra", "barycentric")):
+        expected = getattr(per_face, name)[rows, face]
+        np.testing.assert_array_equal(ours[field], expected, err_msg=field)
+        np.testing.assert_array_equal(getattr(mesh, name), expected, err_msg=name)
+    np.testing.assert_array_equal(ours["index"], face)
+    np.testing.assert_array_equal(mesh.face, face)
+
+
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("name", sorted(MESHES))
 def test_the_mesh_answers_with_the_nearest_faces_own_answer(name, method):

@@ -182,6 +182,25 @@ def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
     np.testing.assert_array_equal(exact, each.min(axis=0))
 
 
+def test_an_instance_sphere_passes_through_the_farthest_vertex_of_its_mesh():
+    # The lower bound of an instance's faces: every vertex within the sphere
+    # (exactly, up to the slack of the bounds), and no wider than they need,
+    # where the corners of the leaves' boxes reach beyond the surface.
+    from fractions import Fraction
+
+    from proximity.broadphase.instances import BOX_SLACK
+
+    tree = proximity.TriangleMesh(*icosphere(3))._tree
+    centre, radius = tree.sphere(False)
+    magnitude = tree.boxes(False)[2]
+    farthest = max(
+        sum((Fraction(float(a)) - Fraction(float(c))) ** 2 for a, c in zip(v, centre, strict=True))
+        for v in tree.vertices
+    )
+    assert Fraction(radius - BOX_SLACK * magnitude) ** 2 <= farthest <= Fraction(radius * (1 + 4 * EPS)) ** 2
+    assert tree.sphere(True)[1] > 1.1 * radius  # the leaves' corners (for eberly's loose boxes)
+
+
 _TETRAHEDRON = (
     np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
     [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],

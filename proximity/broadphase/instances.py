@@ -7,8 +7,9 @@ poses) costs O(instances): the boxes of the prototypes' roots, moved.
 
 A query bounds each instance's distance from below by the larger of the
 distances to its world box and to its bounding sphere (the sphere of the
-prototype about its root box's centre, through the farthest corner of its
-leaves' boxes: unlike the box, it does not grow when the instance turns).
+prototype about its root box's centre, :meth:`.tree.Tree.sphere`, through
+the farthest of a mesh's vertices or of the corners of its leaves' boxes:
+unlike the box, it does not grow when the instance turns).
 It then visits the instances nearest first by that bound, moves the point
 into each one's frame (``R^T (P - t)``, summed as
 :func:`proximity.posed.to_local` sums it) and runs the prototype's search
@@ -44,6 +45,8 @@ from numba.core import types
 
 from .. import primitives
 from .._jit import launcher, part, specialize
+from .._loops import PAIR_ROWS
+from ..primitives import LANES
 from ._alloc import indices, readonly
 from .bounds import CULL_COLUMNS
 from .traverse import (
@@ -113,6 +116,8 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
     sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
+    lanes = np.empty(LANES, np.int64)
+    z = np.empty((PAIR_ROWS, LANES))
     lower = np.empty(m)
     visit = np.empty(m, np.int64)
     pick = np.empty(m, np.int64)
@@ -190,7 +195,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                 )  # fmt: skip
                 nan = math.nan
                 state = DESCEND(
-                    forest, roots[proto], stack_node, stack_sqr, magnitudes[proto],
+                    forest, roots[proto], stack_node, stack_sqr, lanes, z, magnitudes[proto],
                     lx, ly, lz, cap, nan, nan, nan, inst.offset[a], state,
                 )  # fmt: skip
                 best, best_index, best_k, upper, lowest = state[:5]

@@ -3,9 +3,24 @@
 The traversal visits the nearer child first and skips a node when a lower
 bound on the distance from the point to what it holds exceeds the best
 answer so far plus a slack (:mod:`.bounds` shows why that never changes the
-answer).  It is compiled per method and per set of kinds stored: the
+answer).  "Nearer" is by the children's axis-aligned boxes, the larger
+bound (with the oriented box) breaking ties: over a curved surface the
+oriented box of a patch that turns away from the point is nearer than
+that of the patch under it (its plane passes closer), so the larger bound
+sent the search to the wrong side first.  The order changes only which
+primitives are evaluated, never the answer (the least distance, ties to
+the lowest index).  It is compiled per method and per set of kinds stored: the
 method's query of each kind's rows (``row_query`` of its kernel module, see
 :mod:`proximity.primitives`) is bound into it, and nothing else compiles.
+
+Where the tree holds one kind whose module answers rows side by side for
+the method (``row_batch``: the triangle's, for ``robust``), a leaf's rows
+are answered :data:`~proximity.primitives.LANES` at a time, by a loop
+that compiles to SIMD code, with the bits of ``row_query``: a leaf of at
+most that many rows whole, without the rows' own cull tests, a larger one
+in groups of the rows those tests leave.  Rows a test would have skipped
+only add answers that cannot win (:mod:`.bounds`), so the answer is the
+same; the cutoff is applied to the answer, as without them.
 
 Certified
 ---------
@@ -27,6 +42,8 @@ from numba.core import types
 from .. import certified
 from .._fp import EPS, faithful_difference
 from .._jit import inline, kernel, launcher, specialize
+from .._loops import PAIR_OUT, PAIR_ROWS
+from ..primitives import LANES
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per block function call
@@ -84,8 +101,11 @@ _SIGNATURES = {False: _signatures(_TREE), True: _signatures(_INDEXED_TREE)}
 # Bound per method and set of kinds by :func:`proximity._jit.specialize`:
 # the primitives' evaluation and interval (chains over the kinds, see
 # :func:`_chain`), whether the method has an exact fallback, and whether the
-# previous point's answer may seed the search.
-EVALUATE = INTERVAL = DESCEND = None
+# previous point's answer may seed the search; where a tree of one kind
+# answers several rows side by side (its kernel module's ``row_batch``, see
+# :mod:`proximity.primitives`), ``BATCH`` and that function, ``ROWS``.
+EVALUATE = INTERVAL = DESCEND = ROWS = None
+BATCH = False
 EXACT_FALLBACK = False
 SEED_POINT = True
 # The column of the rows' radii where the tree holds rounded primitives
@@ -97,9 +117,20 @@ LOW = HIGH = 0
 ROW = NEXT = CALL = None
 
 
+@inline
+def _lane(z, j):
+    """The answer in column ``j`` of a batch's scratch ``z`` (see :mod:`proximity.primitives`)."""
+    o = PAIR_OUT
+    return (
+        z[o, j], z[o + 1, j], z[o + 2, j], z[o + 3, j], z[o + 4, j],
+        z[o + 5, j], z[o + 6, j], z[o + 7, j], z[o + 8, j],
+    )  # fmt: skip
+
+
 def _descend(
-    tree, root, stack_node, stack_sqr, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset, state
-):
+    tree, root, stack_node, stack_sqr, lanes, z, magnitude, px, py, pz, cap, near_x, near_y, near_z, offset,
+    state,
+):  # fmt: skip
     """Search ``tree`` from node ``root`` for the point ``P`` (finite), updating ``state``.
 
     ``state`` is the best answer so far: ``(best, best_index, best_k, upper,
@@ -107,7 +138,9 @@ def _descend(
     :func:`_search_block` keeps it; nothing beyond ``min(best, cap)`` (and the
     previous closest point ``near``, unless NaN) is visited.  ``offset`` is
     added to the tree's primitive indices (the instances of a scene number
-    their primitives after each other's).
+    their primitives after each other's).  ``stack_node`` and ``stack_sqr``
+    hold ``depth + 1`` entries, ``lanes`` :data:`~proximity.primitives.LANES`
+    and ``z`` is ``(PAIR_ROWS, LANES)``: scratch, allocated once per block.
     """
     kinds, params, index, cull, bounds, child, count = tree
     best, best_index, best_k, upper, lowest, w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state
@@ -124,51 +157,82 @@ def _descend(
     while True:
         first, c = child[node], count[node]
         if c > 0:
-            for k in range(first, first + c):
-                if _culled(cull, k, s, qx, qy, qz, reach):
-                    continue
-                r = EVALUATE(kinds, params, k, px, py, pz)
-                if RADIUS >= 0:
-                    # A rounded primitive: d - R, ranked signed (negative inside).
-                    r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
-                certain = True
-                if EXACT_FALLBACK:
-                    if r[0] != certified.CERTAIN:
-                        certain = False
-                        lo, hi = INTERVAL(kinds, params, k, px, py, pz)
-                        if RADIUS >= 0:
-                            lo, hi = _less(lo, hi, params[k, RADIUS])
-                        lowest = min(lowest, lo)
-                        upper = min(upper, hi)
-                if certain:
-                    d = r[1]
-                    idx = index[k] + offset
-                    if d < best or (d == best and idx < best_index):
-                        best = d
-                        best_index = idx
-                        best_k = k
-                        w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
-                        w_feature = r[6]
-                        w_a0, w_a1, w_a2 = r[7], r[8], r[9]
-                        w_flag = r[10]
-                if RADIUS >= 0:
-                    # The best may be negative (inside a rounded primitive).
-                    reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
-                else:
+            if BATCH:
+                # The leaf's rows LANES at a time, answered side by side: a
+                # leaf of up to LANES whole (the one pass costs about what
+                # their cull tests would), a larger one in groups of the rows
+                # that the reach at the start of each group leaves.
+                k, end = first, first + c
+                while k < end:
+                    n = 0
+                    while k < end and n < LANES:
+                        if c <= LANES or not _culled(cull, k, s, qx, qy, qz, reach):
+                            lanes[n] = k
+                            n += 1
+                        k += 1
+                    if n == 0:
+                        break
+                    ROWS(params, lanes, n, px, py, pz, z)
+                    for j in range(n):
+                        d, sqr, x, y, zz, f, a0, a1, a2 = _lane(z, j)
+                        idx = index[lanes[j]] + offset
+                        if d < best or (d == best and idx < best_index):
+                            best = d
+                            best_index = idx
+                            best_k = lanes[j]
+                            w_sqr, w_x, w_y, w_z, w_feature = sqr, x, y, zz, int(f)
+                            w_a0, w_a1, w_a2, w_flag = a0, a1, a2, False
                     reach = min(min(best, upper) * s, cap) + SLACK
-                limit = reach * reach
+                    limit = reach * reach
+            else:
+                for k in range(first, first + c):
+                    if _culled(cull, k, s, qx, qy, qz, reach):
+                        continue
+                    r = EVALUATE(kinds, params, k, px, py, pz)
+                    if RADIUS >= 0:
+                        # A rounded primitive: d - R, ranked signed (negative inside).
+                        r = _rounded(r, params[k, RADIUS], px, py, pz, EXACT_FALLBACK)
+                    certain = True
+                    if EXACT_FALLBACK:
+                        if r[0] != certified.CERTAIN:
+                            certain = False
+                            lo, hi = INTERVAL(kinds, params, k, px, py, pz)
+                            if RADIUS >= 0:
+                                lo, hi = _less(lo, hi, params[k, RADIUS])
+                            lowest = min(lowest, lo)
+                            upper = min(upper, hi)
+                    if certain:
+                        d = r[1]
+                        idx = index[k] + offset
+                        if d < best or (d == best and idx < best_index):
+                            best = d
+                            best_index = idx
+                            best_k = k
+                            w_sqr, w_x, w_y, w_z = r[2], r[3], r[4], r[5]
+                            w_feature = r[6]
+                            w_a0, w_a1, w_a2 = r[7], r[8], r[9]
+                            w_flag = r[10]
+                    if RADIUS >= 0:
+                        # The best may be negative (inside a rounded primitive).
+                        reach = max(min(min(best, upper) * s, cap), 0.0) + SLACK
+                    else:
+                        reach = min(min(best, upper) * s, cap) + SLACK
+                    limit = reach * reach
             node = -1
         else:
             left = np.int64(child[node])  # node numbers in int64: the bounds' tests compile once
             right = left + 1
             # The oriented box only where the box alone does not prune.
-            dl = _box_sqr(bounds, left, s, qx, qy, qz)
+            bl = _box_sqr(bounds, left, s, qx, qy, qz)
+            dl = bl
             if dl <= limit:
                 dl = max(dl, _slabs_sqr(bounds, left, s, qx, qy, qz))
-            dr = _box_sqr(bounds, right, s, qx, qy, qz)
+            br = _box_sqr(bounds, right, s, qx, qy, qz)
+            dr = br
             if dr <= limit:
                 dr = max(dr, _slabs_sqr(bounds, right, s, qx, qy, qz))
-            if dr < dl:
+            # The nearer box first (see the module docstring); inside both, the nearer bound.
+            if br < bl or (br == bl and dr < dl):
                 left, right, dl, dr = right, left, dr, dl
             if dl <= limit:
                 if dr <= limit:
@@ -176,6 +240,8 @@ def _descend(
                     stack_sqr[sp] = dr
                     sp += 1
                 node = left
+            elif dr <= limit:  # ordered by the boxes, the far one may be the one left
+                node = right
             else:
                 node = -1
         if node < 0:
@@ -220,6 +286,8 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
     sentinel = _SENTINEL
     stack_node = np.empty(depth + 1, np.int64)
     stack_sqr = np.empty(depth + 1)
+    lanes = np.empty(LANES, np.int64)
+    z = np.empty((PAIR_ROWS, LANES))
     # The previous point's closest point, a point of the collection: points
     # are visited in spatial order, so the distance to it is an upper bound
     # on the next point's answer that prunes from the root down.
@@ -242,7 +310,9 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
                 w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag,
             )  # fmt: skip
             near = (near_x, near_y, near_z)
-            state = DESCEND(tree, 0, stack_node, stack_sqr, magnitude, px, py, pz, cutoff, *near, 0, state)
+            state = DESCEND(
+                tree, 0, stack_node, stack_sqr, lanes, z, magnitude, px, py, pz, cutoff, *near, 0, state
+            )  # fmt: skip
             best, best_index, best_k, upper, lowest = state[:5]
             w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
         if best_k >= 0:
@@ -364,10 +434,18 @@ def descent(method, present, radius=-1, indexed=False):
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     # Only the triangle reads its rows through vertices: the other kinds keep the one signature.
     layout = {"indexed": True} if indexed else {}
+    # Rows side by side only in a tree of one kind whose module offers it
+    # for the method (its answers are then always certain), unrounded.
+    rows = None
+    if len(present) == 1 and radius < 0:
+        batch = getattr(present[0].kernels, "row_batch", None)
+        rows = batch(present[0], method, **layout) if batch is not None else None
     return specialize(
         _descend,
         f"{tag}__{names}",
         role="inline",
+        BATCH=rows is not None,
+        ROWS=rows,
         EVALUATE=_chain(present, lambda p: p.kernels.row_query(p, method, **layout), tag),
         INTERVAL=_chain(present, lambda p: p.kernels.row_interval(p, **layout), "interval" + suffix),
         EXACT_FALLBACK=method.exact_fallback,

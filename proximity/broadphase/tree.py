@@ -129,13 +129,21 @@ class Tree:
             with np.errstate(invalid="ignore", over="ignore"):
                 far = np.maximum(np.abs(leaves[:, :3] - centre), np.abs(leaves[:, 3:6] - centre))
                 radius = float(np.sqrt(np.max(np.sum(far * far, axis=1), initial=0.0)))
+                if self.faces is not None and not loose:
+                    # A face is the hull of its vertices: the farthest of them
+                    # bounds it, where a box's corner lies beyond the surface
+                    # (a sphere's leaves reach 1.12 times its radius).
+                    v = self.vertices - centre
+                    radius = min(radius, float(np.sqrt(np.max(np.sum(v * v, axis=1), initial=0.0))))
             out[loose] = (centre, radius if np.isfinite(radius) and np.isfinite(centre).all() else np.inf)
         return out
 
     def sphere(self, loose):
         """``(centre, radius)`` of a sphere around everything stored: about the
         root box's centre, through the farthest corner of the leaves' boxes
-        (tight or loose); an infinite radius where a box is unbounded."""
+        (tight or loose), or, in a tree of faces read through their vertices
+        (tight), through the farthest vertex where it is nearer; an infinite
+        radius where a box is unbounded."""
         return self._spheres[loose]
 
     def boxes(self, loose):
