@@ -552,7 +552,8 @@ def moved_faces(vertices, tree):
 def refitted(tree, vertices, faces, empty=np.empty):
     """The tree of the faces ``faces`` of moved ``vertices``, ``tree`` (built
     on them, with none left out) refitted: :func:`.refit.refit_indexed`, or
-    the rows of a tree of one leaf gathered anew, in arrays from ``empty``."""
+    the rows of a tree of one leaf gathered anew (its cull rows in arrays
+    from ``empty``)."""
     if len(tree.child) > 1:
         return refit_indexed(vertices, tree)
     params, cull, bounds = refit_faces(vertices, faces, tree.index, tree.child, tree.count, tree.kinds)
