@@ -94,6 +94,7 @@ from ._loops import (
     PAIR_OUT,
     PAIR_P,
     PAIR_ROWS,
+    PAIR_V,
     gather_points,
     gather_triangles,
     point_at,
@@ -716,8 +717,10 @@ def _robust_rows(q, ks, n, px, py, pz, z):
     row again beyond ``n``): ``row_batch``, see :mod:`proximity.primitives`."""
     for j in range(LANES):
         x0, y0, z0, x1, y1, z1, x2, y2, z2 = CORNERS(q, ks[min(j, n - 1)])
-        z[0, j], z[1, j], z[2, j], z[3, j], z[4, j], z[5, j] = x0, y0, z0, x1, y1, z1
-        z[6, j], z[7, j], z[8, j], z[PAIR_P, j], z[PAIR_P + 1, j], z[PAIR_P + 2, j] = x2, y2, z2, px, py, pz
+        v = PAIR_V
+        z[v, j], z[v + 1, j], z[v + 2, j], z[v + 3, j], z[v + 4, j], z[v + 5, j] = x0, y0, z0, x1, y1, z1
+        z[v + 6, j], z[v + 7, j], z[v + 8, j] = x2, y2, z2
+        z[PAIR_P, j], z[PAIR_P + 1, j], z[PAIR_P + 2, j] = px, py, pz
     _robust_lanes(z, LANES, n)
 
 

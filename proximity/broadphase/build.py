@@ -710,7 +710,7 @@ def _fitted_faces(vertices, faces, kinds, index, child, count, depth):
     return Tree(
         kinds=kinds, stored_params=None, index=index, child=child, count=count,
         bounds=bounds, cull=cull, loose_bounds=bounds, loose_cull=cull, depth=int(depth), vertices=rows,
-        faces=readonly(wide.view(np.int32), np.int32), sources=sources,
+        faces=read, sources=sources,
     )  # fmt: skip
 
 
