@@ -401,21 +401,19 @@ def _fit_indexed(
     elif step == _ABOVE:
         for t in range(top.shape[0] - 1, -1, -1):
             _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
-    elif step == _ROOTS:
-        for j in range(lo, hi):
-            i = tasks[j]
+    else:
+        # The subtrees' roots (_ROOTS, exact ranges where they hold at most
+        # ``most`` faces), or the nodes above them, children first (_TOP:
+        # over more than REFIT_SUBTREE >= most faces, so merged ranges).
+        nodes = tasks[lo:hi] if step == _ROOTS else top[::-1]
+        for j in range(nodes.shape[0]):
+            i = nodes[j]
             exact = count[i] > 0 or end[i] - start[i] <= most
             first, last = (start[i], end[i]) if exact else (start[i], start[i])
             params, cull = _indexed_rows(vertices, faces, first, last)
             _frame_and_ranges(
                 bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first, most
             )
-    else:
-        # Nodes over more than REFIT_SUBTREE >= most primitives: merged ranges.
-        params, cull = _indexed_rows(vertices, faces, 0, 0)
-        for t in range(top.shape[0] - 1, -1, -1):
-            i = top[t]
-            _frame_and_ranges(bounds, i, start, end, child, count, kinds[:0], params, cull, hull, 0, most)
 
 
 #: Subtrees' roots per call of the roots' step of :func:`fit_indexed`.
