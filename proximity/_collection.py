@@ -101,14 +101,18 @@ class Collection(Frozen):
             return frozen(np.ascontiguousarray(array, dtype=dtype), dtype=dtype, new=True)
 
         index = read_only(hierarchy["index"], np.int64)
-        kinds, params = self._primitives(index)
-        kinds, params = read_only(kinds, np.int8), read_only(params, np.float64)
         child = read_only(hierarchy["child"], np.int64)
         count = read_only(hierarchy["count"], np.int64)
         # Node bounds that pickles of earlier versions hold are not read.
         with _threads.kernel():
             build = broadphase.build
             read = self._reads_faces and hierarchy.get("faces", False)
+            if read:
+                tree = build.restored_faces(self.vertices, self.faces, index, child, count, hierarchy["depth"])
+                if tree is not None:
+                    return tree
+            kinds, params = self._primitives(index)
+            kinds, params = read_only(kinds, np.int8), read_only(params, np.float64)
             faces = build.faces_reader(self.vertices, self.faces, index) if read else None
             return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"], faces=faces)
 

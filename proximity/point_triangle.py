@@ -697,8 +697,7 @@ def _indexed_corners(q, k):
     the rows ``faces[k]`` of ``vertices`` (a tree of faces, :class:`~.broadphase.tree.Tree`).
     The same coordinates as the face's row would hold, so the same answers."""
     vertices, faces = q
-    # After the face's cull row (``broadphase.bounds.FACE_INDEX``).
-    i, j, m = faces[k, 11], faces[k, 12], faces[k, 13]
+    i, j, m = faces[k, 0], faces[k, 1], faces[k, 2]
     return (
         vertices[i, 0], vertices[i, 1], vertices[i, 2], vertices[j, 0], vertices[j, 1], vertices[j, 2],
         vertices[m, 0], vertices[m, 1], vertices[m, 2],

@@ -517,9 +517,9 @@ def test_the_bounds_a_tree_keeps_hold_what_they_bound(scale, offset, exact_range
     vertices = (vertices + offset) * scale
     mesh = TriangleMesh(vertices, faces)
     tree = mesh._tree
-    assert tree.cull.dtype == np.float32
+    assert tree.culling(False).dtype == np.float32
     corners = tree.params[:, :9].reshape(-1, 3, 3)
-    cull = tree.cull.astype(np.float64)
+    cull = tree.culling(False).astype(np.float64)
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     assert (lo >= cull[:, :3]).all() and (hi <= cull[:, 3:6]).all()
     assert (np.linalg.norm(cull[:, 6:9], axis=1) <= 1.0).all()

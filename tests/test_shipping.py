@@ -98,7 +98,7 @@ def test_node_bounds_in_a_pickle_of_an_earlier_version_are_not_read(kind):
     state = copy.deepcopy(shape.__getstate__())
     tree = shape._tree
     state["_hierarchy"]["bounds"] = tree.bounds[:, :11].copy()
-    loose = tree.loose_cull is not tree.cull
+    loose = tree.loose
     state["_hierarchy"]["loose_bounds"] = tree.loose_bounds[:, :11].copy() if loose else None
     back = type(shape).__new__(type(shape))
     back.__setstate__(state)

@@ -75,10 +75,6 @@ SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see t
 #: Columns of a primitive's cull row: its box ``(lo, hi)``, then one slab ``(u, h_min, h_max)``.
 CULL_COLUMNS = 11
 
-#: The column of a face's first vertex index in the cull rows of a tree of
-#: faces read through their vertices (see :attr:`.tree.Tree.faces`).
-FACE_INDEX = CULL_COLUMNS
-
 #: Columns of the rows of a tree of faces alone (hulls of three points):
 #: their nine coordinates, without the padding of a collection of several
 #: kinds to :data:`~proximity.primitives.N_PARAMS`.

@@ -21,7 +21,7 @@ import numpy as np
 from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
-from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, plane_row, primitive_cull, stored_cull
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import EXACT_RANGES, NODE_COLUMNS, fit_indexed, refit, refit_faces, refit_indexed
 from .tree import Tree
 
@@ -546,7 +546,7 @@ def moved_faces(vertices, tree):
     """:func:`leaf_faces` of a tree of faces read through their vertices, for
     its faces over moved ``vertices``: the same rows, renumbered as before."""
     rows = readonly(take_rows(readonly(vertices, np.float64), tree.sources), np.float64)
-    return rows, tree.faces[:, -3:], tree.sources
+    return rows, tree.faces, tree.sources
 
 
 def refitted(tree, vertices, faces, empty=np.empty):
@@ -571,6 +571,18 @@ def faces_reader(vertices, faces, index):
     if len(index) != len(faces):
         return None
     return lambda: leaf_faces(vertices, faces, index)
+
+
+def restored_faces(vertices, faces, index, child, count, depth):
+    """The tree of the faces ``faces`` of ``vertices`` that a build gave, from
+    its decisions (``index``, ``child``, ``count``, ``depth``), fitted as the
+    build fits it (:func:`_fitted_faces`): a tree of more than one node
+    with no face left out; None for any other, which keeps rows."""
+    if len(child) == 1 or len(index) != len(faces):
+        return None
+    kinds = np.full(len(index), primitives.TRIANGLE.code, np.int8)
+    vertices, faces = readonly(vertices, np.float64), readonly(faces, np.int64)
+    return _fitted_faces(vertices, faces, kinds, indices(index), indices(child), indices(count), depth)
 
 
 def assemble(
@@ -613,16 +625,11 @@ def assemble(
         loose_bounds = readonly(refit(child, count, kinds, params, loose, loose_ro), np.float64)
     read = (None, None, None)
     if faces is not None:
+        # The faces read through their vertices, which give their cull rows
+        # where a search needs them (:meth:`.tree.Tree.culling`).
         del params
-        vertices, corners, sources = faces()
-        params = None
-        # Each face's vertex indices in its cull row, in the cache line the
-        # search reads before it evaluates the face.
-        wide = empty((len(corners), FACE_INDEX + 3), np.float32)
-        wide[:, :FACE_INDEX] = tight_ro
-        wide.view(np.int32)[:, FACE_INDEX:] = corners
-        tight_ro = loose_ro = readonly(wide, np.float32)
-        read = (vertices, readonly(wide.view(np.int32), np.int32), sources)
+        read = faces()
+        params = tight_ro = loose_ro = None
     return Tree(
         kinds=kinds,
         stored_params=params,
@@ -696,21 +703,18 @@ def build_tree(kinds, params, leaf_size=None):
 def _fitted_faces(vertices, faces, kinds, index, child, count, depth):
     """The :class:`Tree` of the faces ``faces[index]`` (leaf order) of
     ``vertices`` over the nodes ``child``, ``count`` (more than one): the
-    faces read through their vertices (:func:`leaf_faces`), their cull rows
-    and the nodes' bounds computed from those (:func:`.refit.fit_indexed`),
-    without the faces' rows for more than a subtree at a time."""
+    faces read through their vertices (:func:`leaf_faces`) and the nodes'
+    bounds fitted to them (:func:`.refit.fit_indexed`), without the faces'
+    rows for more than a subtree at a time."""
     rows, corners, sources = leaf_faces(vertices, faces, index)
-    wide = np.empty((len(corners), FACE_INDEX + 3), np.float32)
-    wide.view(np.int32)[:, FACE_INDEX:] = corners
-    del corners
     bounds = empty(len(child), NODE_COLUMNS)
-    kinds, read = readonly(kinds, np.int8), readonly(wide.view(np.int32), np.int32)
-    fit_indexed(rows, read, wide, bounds, child, count, kinds, EXACT_RANGES)
-    bounds, cull = readonly(bounds, np.float64), readonly(wide, np.float32)
+    kinds = readonly(kinds, np.int8)
+    fit_indexed(rows, corners, bounds, child, count, kinds, EXACT_RANGES)
+    bounds = readonly(bounds, np.float64)
     return Tree(
         kinds=kinds, stored_params=None, index=index, child=child, count=count,
-        bounds=bounds, cull=cull, loose_bounds=bounds, loose_cull=cull, depth=int(depth), vertices=rows,
-        faces=read, sources=sources,
+        bounds=bounds, cull=None, loose_bounds=bounds, loose_cull=None, depth=int(depth), vertices=rows,
+        faces=corners, sources=sources,
     )  # fmt: skip
 
 

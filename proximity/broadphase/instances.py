@@ -62,6 +62,7 @@ from .traverse import (
     Outputs,
     TreeArrays,
     descent,
+    reads_cull,
 )
 
 #: The poses and places of the instances: the prototype of each, its rotation
@@ -339,11 +340,13 @@ def _rows(tree):
     return rows
 
 
-def forest(trees, loose=False):
+def forest(trees, loose=False, cull=True):
     """The prototypes' trees as one: ``(TreeArrays, roots, magnitudes, depth,
     radius column)``; one tree is used as it is, several are concatenated
-    (their nodes and rows renumbered), rows padded to one width."""
-    boxes = [tree.boxes(loose) for tree in trees]
+    (their nodes and rows renumbered), rows padded to one width.
+    ``cull=False``: without the primitives' cull rows (see
+    :meth:`.tree.Tree.boxes`)."""
+    boxes = [tree.boxes(loose, cull) for tree in trees]
     if len(trees) == 1:
         (tree,), (bounds, cull, magnitude) = trees, boxes[0]
         arrays = TreeArrays(tree.kinds, tree.rows(), tree.index, cull, bounds, tree.child, tree.count)
@@ -386,7 +389,7 @@ def instance_arrays(trees, prototype, rotation, translation, offset, loose=False
     boxes moved (eight corners, the box around them, widened by
     :data:`BOX_SLACK` of their magnitude), their spheres the prototypes'
     (:meth:`.tree.Tree.sphere`) moved."""
-    roots = np.array([tree.boxes(loose)[0][0, :6] for tree in trees])[prototype]
+    roots = np.array([tree.boxes(loose, False)[0][0, :6] for tree in trees])[prototype]
     spheres = [tree.sphere(loose) for tree in trees]
     centre = np.array([c for c, _ in spheres]).reshape(-1, 3)[prototype]
     radius = np.array([r for _, r in spheres])[prototype]
@@ -450,9 +453,12 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
         index=np.empty(m, np.int64),
         undecided=np.empty(n),
     )
-    arrays, roots, magnitudes, depth, radius = forest(tuple(trees), loose)
-    present = primitives.present(arrays.kinds)
+    present = {p.code: p for tree in trees for p in tree.present}
+    present = tuple(present[code] for code in sorted(present))
     kinds = present if len(present) == 1 else primitives.offering(method)
+    width = max(tree.width for tree in trees)
+    culls = reads_cull(method, kinds, width - 1 if width > primitives.N_PARAMS else -1)
+    arrays, roots, magnitudes, depth, radius = forest(tuple(trees), loose, culls)
     order = readonly(_visiting_order(points), np.int64)
     search = instances_kernel(method, kinds, radius, len(trees) == 1 and trees[0].indexed)
     search(arrays, roots, magnitudes, depth, instances, points, order, out, full, float(cutoff))

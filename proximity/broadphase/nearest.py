@@ -7,7 +7,7 @@ import numpy as np
 from .. import primitives
 from .._rounding import certify_difference
 from ._alloc import readonly
-from .traverse import Outputs, TreeArrays, _gather, search_kernel
+from .traverse import Outputs, TreeArrays, _gather, reads_cull, search_kernel
 
 #: Bits of each coordinate in the Morton codes of the points: a 128^3 grid.
 MORTON_BITS = 7
@@ -105,21 +105,21 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
         index=np.empty(m, np.int64),
         undecided=np.empty(n),
     )
-    bounds, cull, magnitude = tree.boxes(loose)
+    # A tree of one kind gets a search compiled for that kind alone; any
+    # other, the one search for every kind that offers the method (not one
+    # per combination).
+    kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
+    bounds, cull, magnitude = tree.boxes(loose, reads_cull(method, kinds, tree.radius))
     arrays = TreeArrays(tree.kinds, tree.rows(), tree.index, cull, bounds, tree.child, tree.count)
     order = readonly(_visiting_order(points), np.int64)
     # Work per point varies by orders of magnitude (a point at the center of
     # a sphere is equidistant from every face), so blocks are handed out
     # one at a time rather than split evenly between threads up front.
-    # A tree of one kind gets a search compiled for that kind alone; any
-    # other, the one search for every kind that offers the method (not one
-    # per combination).
-    kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     search = search_kernel(method, kinds, tree.radius, tree.indexed)
     search(arrays, tree.depth, magnitude, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))
     if len(rows):
-        _resolve(tree, rows, points, out, full, cull, bounds, magnitude, cutoff)
+        _resolve(tree, rows, points, out, full, tree.culling(loose), bounds, magnitude, cutoff)
     result = out._asdict()
     del result["undecided"]
     return result

@@ -607,7 +607,7 @@ def descent_kernel(method, present, posed, radius_a, radius_b):
 def from_tree(tree):
     """The :class:`PairTree` of a collection's :class:`~.tree.Tree` (tight boxes)."""
     nodes, _, params = node_data(tree)
-    return PairTree(tree.kinds, params, tree.index, tree.cull, nodes)
+    return PairTree(tree.kinds, params, tree.index, tree.culling(False), nodes)
 
 
 def forest(kinds, params):

@@ -13,7 +13,7 @@ import numpy as np
 from .. import _pool, _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import INDEX, empty, empty_ints, readonly, take_rows_into
-from .bounds import CULL_COLUMNS, FACE_COLUMNS, FACE_INDEX, _stored_row, plane_row
+from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
 #: Each primitive kind's number of points it is the hull of, by code.
 _VERTICES = primitives.vertex_counts()
@@ -365,7 +365,7 @@ def _indexed_rows(vertices, faces, first, last):
     for k in range(first, last):
         r = k - first
         for v in range(3):
-            i = faces[k, FACE_INDEX + v]
+            i = faces[k, v]
             for a in range(3):
                 params[r, 3 * v + a] = vertices[i, a]
         p = params[r]
@@ -379,8 +379,7 @@ _SUBTREES, _ABOVE, _ROOTS, _TOP = 0, 1, 2, 3
 
 @kernel(nogil=True)
 def _fit_indexed(
-    step, lo, hi, most, vertices, faces, out, out_faces, bounds, top, tasks, start, end, child, count, kinds,
-    hull,
+    step, lo, hi, most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, hull
 ):  # fmt: skip
     """One step of :func:`fit_indexed`, whose docstring says what each does."""
     if step == _SUBTREES:
@@ -388,14 +387,6 @@ def _fit_indexed(
             root = tasks[j]
             first, last = start[root], end[root]
             params, cull = _indexed_rows(vertices, faces, first, last)
-            for k in range(first, last):
-                _stored_row(cull, k - first, out, k)
-                # The nodes' normal sums from the float32 normals the tree
-                # keeps, as :func:`refit` sums them (an unpickled tree's).
-                for a in range(6, 9):
-                    cull[k - first, a] = out[k, a]
-                for v in range(FACE_INDEX, FACE_INDEX + 3):
-                    out_faces[k, v] = faces[k, v]
             rows = kinds[first:last]
             _fit_subtree_merged(bounds, root, start, end, child, count, rows, params, cull, hull, first, most)
     elif step == _ABOVE:
@@ -420,29 +411,25 @@ def _fit_indexed(
 _ROOTS_CHUNK = 64
 
 
-def fit_indexed(vertices, faces, out, bounds, child, count, kinds, most):
-    """A tree of faces read through their vertices fitted: its cull rows
-    ``out`` (``(n, FACE_INDEX + 3)`` float32, the faces' vertex indices in
-    the last three columns, as ``faces``, a read-only int32 view of rows
-    like them, gives them) and its nodes' bounds ``bounds`` (``(m,
-    NODE_COLUMNS)``), from ``vertices`` (the tree's, in its order).
+def fit_indexed(vertices, faces, bounds, child, count, kinds, most):
+    """The bounds ``bounds`` (``(m, NODE_COLUMNS)``) of the nodes of a tree
+    of faces read through their vertices, fitted to its faces ``faces``
+    (each one's three rows of ``vertices``, the tree's, in its order).
 
     Each face's float64 row and cull row are computed from its vertices
     (:func:`_indexed_rows`) for one subtree of at most
-    :data:`REFIT_SUBTREE` faces at a time, the cull row written in float32
-    (:func:`.bounds.stored_cull`'s rounding) beside the indices, and the
-    subtree's nodes fitted while its rows are in cache, on the threads
-    (``_SUBTREES``); then the boxes and normal sums of the nodes above the
-    subtrees (``_ABOVE``), the subtrees' roots' frames and ranges
-    (``_ROOTS``: a root's frame overwrites its sum, which the nodes above
-    read first) and the nodes above (``_TOP``, children first).  Slab
-    ranges are exact for the leaves and the nodes over at most ``most``
-    faces (at most :data:`REFIT_SUBTREE`), merged from the children's above
-    (see :func:`refit_indexed`).
+    :data:`REFIT_SUBTREE` faces at a time, and the subtree's nodes fitted
+    while its rows are in cache, on the threads (``_SUBTREES``); then the
+    boxes and normal sums of the nodes above the subtrees (``_ABOVE``), the
+    subtrees' roots' frames and ranges (``_ROOTS``: a root's frame
+    overwrites its sum, which the nodes above read first) and the nodes
+    above (``_TOP``, children first).  Slab ranges are exact for the leaves
+    and the nodes over at most ``most`` faces (at most
+    :data:`REFIT_SUBTREE`), merged from the children's above (see
+    :func:`refit_indexed`).  Nothing is kept of the faces' rows.
     """
     top, tasks, start, end = _tasks(child, count)
-    args = (most, vertices, faces, out, out.view(np.int32), bounds, top, tasks, start, end, child, count)
-    args = (*args, kinds, _VERTICES)
+    args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
     _threads.spread(lambda lo, hi: _fit_indexed(_SUBTREES, lo, hi, *args), len(tasks))
     _fit_indexed(_ABOVE, 0, 0, *args)
     _threads.spread(lambda lo, hi: _fit_indexed(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
@@ -604,10 +591,9 @@ def refit_faces(vertices, faces, order, child, count, kinds):
 def refit_indexed(vertices, tree):
     """The tree of faces read through their vertices ``tree`` (of more than
     one node) over the moved ``vertices`` (the mesh's, in its order): the
-    same nodes and faces, each face's cull row computed anew, the nodes'
-    bounds fitted to them, in one pass per subtree while its faces are in
-    cache; the faces' rows are held for one subtree at a time, never for
-    the whole tree.
+    same nodes and faces, the nodes' bounds fitted to the faces in one pass
+    per subtree while its faces are in cache; the faces' rows are held for
+    one subtree at a time, never for the whole tree.
 
     Only the leaves' slab ranges are exact; a node above them takes the
     union of its children's ranges along its axis, each child's from its
@@ -617,10 +603,7 @@ def refit_indexed(vertices, tree):
     everything below: the oriented box's corners ``sum h_e e / |e|^2`` are
     exact for orthogonal axes, the frames depart from orthogonality by a
     few ``eps`` and the projections round by a few ``eps`` of the box's
-    magnitude, which the ``2^-36`` widening covers many times over.  The
-    cull rows are those of a build (:func:`.bounds.stored_cull` of the
-    faces' float64 rows), so a query prunes as it would in a fresh tree
-    with these bounds.
+    magnitude, which the ``2^-36`` widening covers many times over.
     """
     # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
     # over the memory of the frame before, once that mesh is gone, rather than
@@ -628,18 +611,8 @@ def refit_indexed(vertices, tree):
     sources = readonly(tree.sources, np.int64)
     rows = _pool.empty((len(sources), 3))
     take_rows_into(readonly(vertices, np.float64), sources, rows)
-    faces = _pool.empty(tree.faces.shape, np.float32)
     bounds = _pool.empty((len(tree.child), NODE_COLUMNS))
     rows = readonly(rows, np.float64)
-    fit_indexed(rows, tree.faces, faces, bounds, tree.child, tree.count, tree.kinds, 0)
-    faces = readonly(faces, np.float32)
+    fit_indexed(rows, tree.faces, bounds, tree.child, tree.count, tree.kinds, 0)
     bounds = readonly(bounds, np.float64)
-    return dataclasses.replace(
-        tree,
-        bounds=bounds,
-        cull=faces,
-        loose_bounds=bounds,
-        loose_cull=faces,
-        vertices=rows,
-        faces=readonly(faces.view(np.int32), np.int32),
-    )
+    return dataclasses.replace(tree, bounds=bounds, loose_bounds=bounds, vertices=rows)

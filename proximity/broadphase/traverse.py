@@ -16,11 +16,12 @@ method's query of each kind's rows (``row_query`` of its kernel module, see
 Where the tree holds one kind whose module answers rows side by side for
 the method (``row_batch``: the triangle's, for ``robust``), a leaf's rows
 are answered :data:`~proximity.primitives.LANES` at a time, by a loop
-that compiles to SIMD code, with the bits of ``row_query``: a leaf of at
-most that many rows whole, without the rows' own cull tests, a larger one
-in groups of the rows those tests leave.  Rows a test would have skipped
-only add answers that cannot win (:mod:`.bounds`), so the answer is the
-same; the cutoff is applied to the answer, as without them.
+that compiles to SIMD code, with the bits of ``row_query``, without the
+rows' own cull tests: such a search reads no cull rows
+(:func:`reads_cull`), which a tree of faces then need not keep.  Rows a
+test would have skipped only add answers that cannot win (:mod:`.bounds`),
+so the answer is the same; the cutoff is applied to the answer, as
+without them.
 
 Certified
 ---------
@@ -158,20 +159,13 @@ def _descend(
         first, c = child[node], count[node]
         if c > 0:
             if BATCH:
-                # The leaf's rows LANES at a time, answered side by side: a
-                # leaf of up to LANES whole (the one pass costs about what
-                # their cull tests would), a larger one in groups of the rows
-                # that the reach at the start of each group leaves.
-                k, end = first, first + c
-                while k < end:
-                    n = 0
-                    while k < end and n < LANES:
-                        if c <= LANES or not _culled(cull, k, s, qx, qy, qz, reach):
-                            lanes[n] = k
-                            n += 1
-                        k += 1
-                    if n == 0:
-                        break
+                # The leaf's rows LANES at a time, answered side by side,
+                # without their cull tests: a pass costs about what the tests
+                # of its rows would.
+                for k in range(first, first + c, LANES):
+                    n = min(LANES, first + c - k)
+                    for j in range(n):
+                        lanes[j] = k + j
                     ROWS(params, lanes, n, px, py, pz, z)
                     for j in range(n):
                         d, sqr, x, y, zz, f, a0, a1, a2 = _lane(z, j)
@@ -425,6 +419,24 @@ def _chain(present, make, tag):
     return chain
 
 
+def _row_batch(method, present, radius, indexed):
+    """The rows side by side of :func:`descent`, or None: only in a tree of one
+    kind whose module offers them for the method (its answers are then
+    always certain), unrounded."""
+    if len(present) != 1 or radius >= 0:
+        return None
+    batch = getattr(present[0].kernels, "row_batch", None)
+    layout = {"indexed": True} if indexed else {}
+    return batch(present[0], method, **layout) if batch is not None else None
+
+
+def reads_cull(method, present, radius=-1):
+    """Whether the search of ``method`` over trees holding the kinds ``present``
+    (see :func:`descent`) reads its primitives' cull rows: not where it
+    answers rows side by side."""
+    return _row_batch(method, present, radius, False) is None
+
+
 @functools.cache
 def descent(method, present, radius=-1, indexed=False):
     """:func:`_descend` compiled for ``method``, the kinds ``present`` and the radius column;
@@ -434,12 +446,7 @@ def descent(method, present, radius=-1, indexed=False):
     names = "_".join(p.name for p in present) + ("_rounded" if radius >= 0 else "")
     # Only the triangle reads its rows through vertices: the other kinds keep the one signature.
     layout = {"indexed": True} if indexed else {}
-    # Rows side by side only in a tree of one kind whose module offers it
-    # for the method (its answers are then always certain), unrounded.
-    rows = None
-    if len(present) == 1 and radius < 0:
-        batch = getattr(present[0].kernels, "row_batch", None)
-        rows = batch(present[0], method, **layout) if batch is not None else None
+    rows = _row_batch(method, present, radius, indexed)
     return specialize(
         _descend,
         f"{tag}__{names}",

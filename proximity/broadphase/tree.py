@@ -6,6 +6,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import primitives
+from ._alloc import readonly
+from .bounds import CULL_COLUMNS, primitive_cull, stored_cull
+
+#: The culling data of a search that reads none.
+_NO_CULL = readonly(np.empty((0, CULL_COLUMNS), np.float32), np.float32)
 
 
 @dataclass(frozen=True, eq=False)
@@ -30,9 +35,11 @@ class Tree:
         ``2**30`` primitives (:data:`~._alloc.MOST_PRIMITIVES`).
     bounds : ndarray of float64, shape ``(m, NODE_COLUMNS)``
         Node boxes and oriented boxes (see :func:`refit`).
-    cull : ndarray of float32, shape ``(n, 11)``
+    cull : ndarray of float32, shape ``(n, 11)``, or None
         Each stored primitive's box and slab ``(lo, hi, u, h_min, h_max)``,
-        rounded outwards (:func:`~.bounds.stored_cull`).
+        rounded outwards (:func:`~.bounds.stored_cull`); None in a tree of
+        faces read through their vertices, which computes them where a
+        search needs them (:meth:`culling`).
     loose_bounds, loose_cull : ndarray of float64, float32
         The same for ``eberly`` (the same arrays unless there are circles).
     depth : int
@@ -41,11 +48,10 @@ class Tree:
         A tree of faces (of a mesh): the vertices of its faces, in the order
         in which the faces in leaf order first use them, so that a leaf's
         vertices lie together in memory.
-    faces : ndarray of int32, shape ``(n, 14)``, or None
-        The cull rows seen as int32, whose last three columns hold each
-        stored face's three rows of ``vertices``: the search reads a face's
-        coordinates through them (:meth:`rows`), 12 bytes a face and about
-        12 of vertices where the faces' rows take 72.
+    faces : ndarray of int32, shape ``(n, 3)``, or None
+        Each stored face's three rows of ``vertices``: the search reads a
+        face's coordinates through them (:meth:`rows`), 12 bytes a face and
+        about 12 of vertices where the faces' rows take 72.
     sources : ndarray of int32, shape ``(V,)``, or None
         The index of each row of ``vertices`` in the mesh's vertices: a refit
         (:meth:`proximity.TriangleMesh.with_vertices`) reads the moved ones
@@ -58,9 +64,9 @@ class Tree:
     child: np.ndarray
     count: np.ndarray
     bounds: np.ndarray
-    cull: np.ndarray
+    cull: np.ndarray | None
     loose_bounds: np.ndarray
-    loose_cull: np.ndarray
+    loose_cull: np.ndarray | None
     depth: int
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
@@ -78,7 +84,7 @@ class Tree:
         call (for the queries other than the nearest-face search)."""
         if self.faces is None:
             return self.stored_params
-        params = self.vertices[self.faces[:, -3:]].reshape(len(self.faces), 9)
+        params = self.vertices[self.faces].reshape(len(self.faces), 9)
         params.flags.writeable = False
         return params
 
@@ -86,7 +92,7 @@ class Tree:
         """``params[rows]``, without gathering the other rows."""
         if self.faces is None:
             return self.stored_params[rows]
-        return self.vertices[self.faces[rows, -3:]].reshape(len(rows), 9)
+        return self.vertices[self.faces[rows]].reshape(len(rows), 9)
 
     def rows(self):
         """What the search reads a stored primitive from: ``params``, or
@@ -117,13 +123,13 @@ class Tree:
     @property
     def loose(self):
         """Whether the loose boxes differ from the tight ones."""
-        return self.loose_cull is not self.cull
+        return self.loose_bounds is not self.bounds
 
     @functools.cached_property
     def _spheres(self):
         out = {}
         for loose in (False, True):
-            bounds = self.boxes(loose)[0]
+            bounds = self.boxes(loose, False)[0]
             centre = (bounds[0, :3] + bounds[0, 3:6]) / 2.0
             leaves = bounds[self.count > 0, :6]
             with np.errstate(invalid="ignore", over="ignore"):
@@ -146,9 +152,26 @@ class Tree:
         radius where a box is unbounded."""
         return self._spheres[loose]
 
-    def boxes(self, loose):
-        """``(node boxes, primitive culling data, magnitude)``, tight or loose."""
-        bounds, cull = (self.loose_bounds, self.loose_cull) if loose else (self.bounds, self.cull)
+    @functools.cached_property
+    def _face_cull(self):
+        # Faces alone: tight and loose rows are the same.
+        return readonly(stored_cull(primitive_cull(self.kinds, self.params)[0]), np.float32)
+
+    def culling(self, loose):
+        """Each stored primitive's cull row, tight or loose (:attr:`cull`):
+        in a tree of faces read through their vertices, computed at the
+        first call and kept (44 bytes a face); the robust search of such a
+        tree does without them (:mod:`.traverse`)."""
+        if self.faces is not None:
+            return self._face_cull
+        return self.loose_cull if loose else self.cull
+
+    def boxes(self, loose, cull=True):
+        """``(node boxes, primitive culling data, magnitude)``, tight or loose;
+        ``cull=False``: an empty array for the culling data, which a search
+        that reads none takes (:func:`.traverse.reads_cull`)."""
+        bounds = self.loose_bounds if loose else self.bounds
+        cull = self.culling(loose) if cull else _NO_CULL
         # A coordinate that overflowed leaves its box unbounded, which prunes
         # nothing; the scale is set by the finite ones.
         corners = np.abs(bounds[0, :6])
