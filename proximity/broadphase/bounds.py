@@ -53,6 +53,10 @@ longer than before) with their ranges widened by what the rounding of the
 axis can move ``u . X`` over the box, then rounded outwards.  Each row
 still holds its primitive, so the argument above is unchanged; a
 coordinate beyond float32's range leaves its side of the box unbounded.
+A tree of a mesh's faces keeps none: the robust search answers a leaf's
+faces side by side without them (:mod:`.traverse`), and the other
+searches have them computed from the vertices at their first use
+(:meth:`.tree.Tree.culling`).
 
 ``eberly``'s circle is the exception: near the axis it takes the rim
 direction from rounding noise, so its closest point can leave the plane by
