@@ -107,14 +107,15 @@ class Collection(Frozen):
         with _threads.kernel():
             build = broadphase.build
             read = self._reads_faces and hierarchy.get("faces", False)
+            depth = hierarchy["depth"]
             if read:
-                tree = build.restored_faces(self.vertices, self.faces, index, child, count, hierarchy["depth"])
+                tree = build.restored_faces(self.vertices, self.faces, index, child, count, depth)
                 if tree is not None:
                     return tree
             kinds, params = self._primitives(index)
             kinds, params = read_only(kinds, np.int8), read_only(params, np.float64)
             faces = build.faces_reader(self.vertices, self.faces, index) if read else None
-            return broadphase.assemble(kinds, params, index, child, count, hierarchy["depth"], faces=faces)
+            return broadphase.assemble(kinds, params, index, child, count, depth, faces=faces)
 
     def _query(self, points, method, full, max_distance=None):
         method = check_method(method, self.methods)
