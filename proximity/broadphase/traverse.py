@@ -430,6 +430,7 @@ def _row_batch(method, present, radius, indexed):
     return batch(present[0], method, **layout) if batch is not None else None
 
 
+@functools.cache
 def reads_cull(method, present, radius=-1):
     """Whether the search of ``method`` over trees holding the kinds ``present``
     (see :func:`descent`) reads its primitives' cull rows: not where it
