@@ -162,7 +162,8 @@ def _descend(
                 # leaf of up to LANES whole (the one pass costs about what
                 # their cull tests would), a larger one in groups of the rows
                 # that the reach at the start of each group leaves.
-                k, end = first, first + c
+                k = np.int64(first)  # one type for the cull tests here and elsewhere
+                end = k + c
                 while k < end:
                     n = 0
                     while k < end and n < LANES:
