@@ -25,7 +25,7 @@ N_PARAMS = primitives.N_PARAMS
 REFIT_SUBTREE = 8192
 
 
-@inline
+@spliced
 def _rows(child, count, i):
     """The stored primitives ``first .. last - 1`` under node ``i``."""
     k = i
@@ -38,9 +38,9 @@ def _rows(child, count, i):
     return first, child[k] + count[k]
 
 
-@inline
+@spliced
 def _refit_top(child, count, top, tasks, start, end):
-    """The tasks of :func:`refit_faces`: ``(n_top, n_tasks)``, the first entries of
+    """The tasks of :func:`fit_indexed`: ``(n_top, n_tasks)``, the first entries of
     ``top`` and ``tasks`` set.
 
     ``top`` are the nodes over more than :data:`REFIT_SUBTREE` primitives,
@@ -202,7 +202,7 @@ def _ranges(bounds, i, first, last, kinds, params, cull, vertices):
         bounds[i, c + 1] = high if finite else math.inf
 
 
-@inline
+@spliced
 def _subtree_nodes(root, start, end, child, count):
     """``(nodes, n)``: the ``n`` nodes of the subtree at ``root``, each before
     its descendants (``start[root]``, ``end[root]`` its range of primitives)."""
@@ -273,7 +273,9 @@ def _ranges_merged(bounds, i, child):
     for c in range(child[i], child[i] + 2):
         ux, uy, uz = bounds[c, 6], bounds[c, 7], bounds[c, 8]
         framed = ux * ux + uy * uy + uz * uz > 0.25
-        e0, e1, e2 = _oriented(bounds, c, 6), _oriented(bounds, c, 11), _oriented(bounds, c, 16)
+        # Columns as int64, not literals, so that _oriented compiles once.
+        six = np.int64(6)
+        e0, e1, e2 = _oriented(bounds, c, six), _oriented(bounds, c, six + 5), _oriented(bounds, c, six + 10)
         for axis in (6, 11, 16):
             ax, ay, az = bounds[i, axis], bounds[i, axis + 1], bounds[i, axis + 2]
             lo, hi = _box_range(bounds, c, ax, ay, az)
@@ -298,30 +300,7 @@ def _ranges_merged(bounds, i, child):
         bounds[i, c + 1] = high + widen if finite else math.inf
 
 
-@inline
-def _fit_subtree_merged(bounds, root, start, end, child, count, kinds, params, cull, vertices, base, most):
-    """Every node of the subtree at ``root``: boxes and normal sums from the
-    leaves up, then, but for ``root`` itself, its frame, and its ranges:
-    exact for a leaf and a node over at most ``most`` primitives, from its
-    children's above (:func:`_ranges_merged`), children first.  Row ``k``
-    of ``kinds``, ``params`` and ``cull`` is stored primitive ``base + k``."""
-    nodes, n = _subtree_nodes(root, start, end, child, count)
-    for t in range(n - 1, -1, -1):
-        i = nodes[t]
-        if count[i] > 0:
-            start[i] = child[i]
-            end[i] = child[i] + count[i]
-            _merge(bounds, i, cull, start[i] - base, end[i] - base)
-        else:
-            start[i] = start[child[i]]
-            end[i] = end[child[i] + 1]
-            _merge(bounds, i, bounds, np.int64(child[i]), child[i] + 2)
-    for t in range(n - 1, 0, -1):
-        i = nodes[t]
-        _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base, most)
-
-
-@inline
+@spliced
 def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base, most):
     """Node ``i``'s frame, and its ranges: exact for a leaf and a node over at
     most ``most`` primitives (row ``k`` of ``kinds``, ``params`` and ``cull``
@@ -355,7 +334,7 @@ def _gather_faces(vertices, faces, order, params, cull):
     _gather_rows(vertices, faces, order, params, cull, 0, order.shape[0])
 
 
-@inline
+@spliced
 def _indexed_rows(vertices, faces, first, last):
     """``(params, cull)`` of stored faces ``first .. last - 1`` of a tree of
     faces read through their vertices (:attr:`.tree.Tree.faces`), in new
@@ -374,37 +353,65 @@ def _indexed_rows(vertices, faces, first, last):
 
 
 #: The steps of :func:`_fit_indexed`.
-_SUBTREES, _ABOVE, _ROOTS, _TOP = 0, 1, 2, 3
+_TASKS, _SUBTREES, _ABOVE, _ROOTS, _TOP = 0, 1, 2, 3, 4
 
 
 @kernel(nogil=True)
 def _fit_indexed(
     step, lo, hi, most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, hull
 ):  # fmt: skip
-    """One step of :func:`fit_indexed`, whose docstring says what each does."""
-    if step == _SUBTREES:
-        for j in range(lo, hi):
-            root = tasks[j]
-            first, last = start[root], end[root]
-            params, cull = _indexed_rows(vertices, faces, first, last)
-            rows = kinds[first:last]
-            _fit_subtree_merged(bounds, root, start, end, child, count, rows, params, cull, hull, first, most)
-    elif step == _ABOVE:
-        for t in range(top.shape[0] - 1, -1, -1):
-            _merge(bounds, top[t], bounds, np.int64(child[top[t]]), child[top[t]] + 2)
-    else:
-        # The subtrees' roots (_ROOTS, exact ranges where they hold at most
-        # ``most`` faces), or the nodes above them, children first (_TOP:
-        # over more than REFIT_SUBTREE >= most faces, so merged ranges).
-        nodes = tasks[lo:hi] if step == _ROOTS else top[::-1]
-        for j in range(nodes.shape[0]):
-            i = nodes[j]
-            exact = count[i] > 0 or end[i] - start[i] <= most
-            first, last = (start[i], end[i]) if exact else (start[i], start[i])
-            params, cull = _indexed_rows(vertices, faces, first, last)
+    """One step of :func:`fit_indexed`, whose docstring says what each does:
+    ``(n_top, n_tasks)`` for ``_TASKS`` (:func:`_refit_top`), zeros for the others.
+
+    One kernel, with one call of each helper (spliced into it, or compiled
+    once for it), so that a first build compiles each once: every step but
+    the first goes through the one loop, over the subtrees' roots or the
+    nodes above them, and takes its part of it.
+    """
+    if step == _TASKS:
+        return _refit_top(child, count, top, tasks, start, end)
+    whole = step == _SUBTREES
+    # The subtrees' roots (_SUBTREES, _ROOTS), or the nodes above them,
+    # children first (_ABOVE, _TOP: over more than REFIT_SUBTREE >= most
+    # faces, so merged ranges).
+    roots = tasks[lo:hi] if whole or step == _ROOTS else top[::-1]
+    for j in range(roots.shape[0]):
+        root = roots[j]
+        # The rows of the faces whose points the step reads: the subtree's,
+        # or a root's with exact ranges, or none.
+        first, last = start[root], end[root]
+        if not whole and (step == _ABOVE or (count[root] == 0 and last - first > most)):
+            last = first
+        params, cull = _indexed_rows(vertices, faces, first, last)
+        if whole:
+            nodes, n = _subtree_nodes(root, start, end, child, count)
+        else:
+            nodes, n = np.empty(1, np.int64), 1
+            nodes[0] = root
+        # Boxes and normal sums from the leaves up (_SUBTREES: every node
+        # of the subtree; _ABOVE: the node), then, children first, frames
+        # and ranges (_SUBTREES: the subtree's nodes but its root, whose
+        # frame would overwrite the sum the nodes above read; _ROOTS, _TOP:
+        # the node).
+        boxes = whole or step == _ABOVE
+        for t in range(n - 1 if boxes else -1, -1, -1):
+            i = nodes[t]
+            if count[i] > 0:
+                start[i] = child[i]
+                end[i] = child[i] + count[i]
+                rows, a, b = cull, start[i] - first, end[i] - first
+            else:
+                start[i] = start[child[i]]
+                end[i] = end[child[i] + 1]
+                rows, a, b = bounds, np.int64(child[i]), np.int64(child[i] + 2)
+            _merge(bounds, i, rows, a, b)
+        frames = 0 if whole else (-1 if step != _ABOVE else n - 1)
+        for t in range(n - 1, frames, -1):
+            i = nodes[t]
             _frame_and_ranges(
                 bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first, most
             )
+    return 0, 0
 
 
 #: Subtrees' roots per call of the roots' step of :func:`fit_indexed`.
@@ -416,19 +423,24 @@ def fit_indexed(vertices, faces, bounds, child, count, kinds, most):
     of faces read through their vertices, fitted to its faces ``faces``
     (each one's three rows of ``vertices``, the tree's, in its order).
 
-    Each face's float64 row and cull row are computed from its vertices
-    (:func:`_indexed_rows`) for one subtree of at most
-    :data:`REFIT_SUBTREE` faces at a time, and the subtree's nodes fitted
-    while its rows are in cache, on the threads (``_SUBTREES``); then the
-    boxes and normal sums of the nodes above the subtrees (``_ABOVE``), the
-    subtrees' roots' frames and ranges (``_ROOTS``: a root's frame
-    overwrites its sum, which the nodes above read first) and the nodes
-    above (``_TOP``, children first).  Slab ranges are exact for the leaves
-    and the nodes over at most ``most`` faces (at most
+    The subtrees' roots and the nodes above them first (``_TASKS``,
+    :func:`_refit_top`).  Each face's float64 row and cull row are
+    computed from its vertices (:func:`_indexed_rows`) for one subtree of
+    at most :data:`REFIT_SUBTREE` faces at a time, and the subtree's nodes
+    fitted while its rows are in cache, on the threads (``_SUBTREES``);
+    then the boxes and normal sums of the nodes above the subtrees
+    (``_ABOVE``), the subtrees' roots' frames and ranges (``_ROOTS``: a
+    root's frame overwrites its sum, which the nodes above read first) and
+    the nodes above (``_TOP``, children first).  Slab ranges are exact for
+    the leaves and the nodes over at most ``most`` faces (at most
     :data:`REFIT_SUBTREE`), merged from the children's above (see
     :func:`refit_indexed`).  Nothing is kept of the faces' rows.
     """
-    top, tasks, start, end = _tasks(child, count)
+    m = len(child)
+    top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
+    args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
+    n_top, n_tasks = _fit_indexed(_TASKS, 0, 0, *args)
+    top, tasks = top[:n_top], tasks[:n_tasks]
     args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
     _threads.spread(lambda lo, hi: _fit_indexed(_SUBTREES, lo, hi, *args), len(tasks))
     _fit_indexed(_ABOVE, 0, 0, *args)
@@ -479,20 +491,6 @@ def _fit_step(step, lo, hi, most, bounds, start, end, child, count, kinds, param
             if count[i] == 0 and end[i] - start[i] > most:
                 _frame(bounds, i)
                 _ranges_merged(bounds, i, child)
-
-
-@kernel()
-def _refit_tasks(child, count, top, tasks, start, end):
-    """:func:`_refit_top` (the tasks of :func:`refit_faces`)."""
-    return _refit_top(child, count, top, tasks, start, end)
-
-
-def _tasks(child, count):
-    """``(top, tasks, start, end)`` of :func:`_refit_top`, the first two cut to length."""
-    m = len(child)
-    top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
-    n_top, n_tasks = _refit_tasks(child, count, top, tasks, start, end)
-    return top[:n_top], tasks[:n_tasks], start, end
 
 
 #: Ranges of nodes per thread of the frames' step of :func:`refit`.
