@@ -727,7 +727,7 @@ def row_batch(primitive, method, indexed=False):
     """:func:`_robust_rows` for ``robust`` (None for the other methods)."""
     if method.name == "robust":
         tag = "indexed" if indexed else "rows"
-        return specialize(_robust_rows, tag, role="spliced", CORNERS=_corners(indexed))
+        return specialize(_robust_rows, tag, role="inline", CORNERS=_corners(indexed))
 
 
 def _corners(indexed):

@@ -42,7 +42,7 @@ from numba.core import types
 
 from .. import certified
 from .._fp import EPS, faithful_difference
-from .._jit import inline, kernel, launcher, specialize, spliced
+from .._jit import inline, kernel, launcher, specialize
 from .._loops import PAIR_OUT, PAIR_ROWS
 from ..primitives import LANES
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
@@ -118,7 +118,7 @@ LOW = HIGH = 0
 ROW = NEXT = CALL = None
 
 
-@spliced
+@inline
 def _lane(z, j):
     """The answer in column ``j`` of a batch's scratch ``z`` (see :mod:`proximity.primitives`)."""
     o = PAIR_OUT
