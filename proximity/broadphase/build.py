@@ -22,7 +22,7 @@ from .. import _threads, primitives
 from .._jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
-from .refit import EXACT_RANGES, NODE_COLUMNS, fit_indexed, refit, refit_faces, refit_indexed
+from .refit import NODE_COLUMNS, build_ranges, fit_indexed, refit, refit_faces, refit_indexed
 from .tree import Tree
 
 LEAF_SIZE = 4
@@ -711,7 +711,7 @@ def _fitted_faces(vertices, faces, kinds, index, child, count, depth):
     rows, corners, sources = leaf_faces(vertices, faces, index)
     bounds = empty(len(child), NODE_COLUMNS)
     kinds = readonly(kinds, np.int8)
-    fit_indexed(rows, corners, bounds, child, count, kinds, EXACT_RANGES)
+    fit_indexed(rows, corners, bounds, child, count, kinds, build_ranges(len(corners)))
     bounds = readonly(bounds, np.float64)
     return Tree(
         kinds=kinds, stored_params=None, index=index, child=child, count=count,

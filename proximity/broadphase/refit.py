@@ -6,12 +6,13 @@ that read them, and why they never change an answer, are in
 """
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
 
 from .. import _pool, _threads, primitives
-from .._jit import inline, kernel, spliced
+from .._jit import inline, kernel, specialize, spliced
 from ._alloc import INDEX, empty, empty_ints, readonly, take_rows_into
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
@@ -300,18 +301,6 @@ def _ranges_merged(bounds, i, child):
         bounds[i, c + 1] = high + widen if finite else math.inf
 
 
-@spliced
-def _frame_and_ranges(bounds, i, start, end, child, count, kinds, params, cull, vertices, base, most):
-    """Node ``i``'s frame, and its ranges: exact for a leaf and a node over at
-    most ``most`` primitives (row ``k`` of ``kinds``, ``params`` and ``cull``
-    is stored primitive ``base + k``), its children's otherwise."""
-    _frame(bounds, i)
-    if count[i] > 0 or end[i] - start[i] <= most:
-        _ranges(bounds, i, start[i] - base, end[i] - base, kinds, params, cull, vertices)
-    else:
-        _ranges_merged(bounds, i, child)
-
-
 @inline
 def _gather_rows(vertices, faces, order, params, cull, first, last):
     """Rows ``first .. last - 1``: the coordinates of faces ``faces[order]``,
@@ -356,7 +345,10 @@ def _indexed_rows(vertices, faces, first, last):
 _TASKS, _SUBTREES, _ABOVE, _ROOTS, _TOP = 0, 1, 2, 3, 4
 
 
-@kernel(nogil=True)
+#: Whether :func:`_fit_indexed` merges ranges (bound by :func:`_fit_kernel`).
+MERGED = True
+
+
 def _fit_indexed(
     step, lo, hi, most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, hull
 ):  # fmt: skip
@@ -366,7 +358,10 @@ def _fit_indexed(
     One kernel, with one call of each helper (spliced into it, or compiled
     once for it), so that a first build compiles each once: every step but
     the first goes through the one loop, over the subtrees' roots or the
-    nodes above them, and takes its part of it.
+    nodes above them, and takes its part of it.  Compiled twice
+    (:func:`_fit_kernel`): with merged ranges (``MERGED``), and without,
+    for a fit whose every node's ranges are exact, which a first build of
+    a small mesh then compiles alone.
     """
     if step == _TASKS:
         return _refit_top(child, count, top, tasks, start, end)
@@ -407,10 +402,14 @@ def _fit_indexed(
             _merge(bounds, i, rows, a, b)
         frames = 0 if whole else (-1 if step != _ABOVE else n - 1)
         for t in range(n - 1, frames, -1):
+            # The node's frame, and its ranges: exact for a leaf and a node
+            # over at most ``most`` faces, its children's otherwise.
             i = nodes[t]
-            _frame_and_ranges(
-                bounds, i, start, end, child, count, kinds[first:last], params, cull, hull, first, most
-            )
+            _frame(bounds, i)
+            if count[i] > 0 or end[i] - start[i] <= most:
+                _ranges(bounds, i, start[i] - first, end[i] - first, kinds[first:last], params, cull, hull)
+            elif MERGED:
+                _ranges_merged(bounds, i, child)
     return 0, 0
 
 
@@ -437,16 +436,24 @@ def fit_indexed(vertices, faces, bounds, child, count, kinds, most):
     :func:`refit_indexed`).  Nothing is kept of the faces' rows.
     """
     m = len(child)
+    # No node holds more than every face: then no range is merged.
+    fit = _fit_kernel(most < len(faces))
     top, tasks, start, end = empty_ints(m), empty_ints(m), empty_ints(m), empty_ints(m)
     args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
-    n_top, n_tasks = _fit_indexed(_TASKS, 0, 0, *args)
+    n_top, n_tasks = fit(_TASKS, 0, 0, *args)
     top, tasks = top[:n_top], tasks[:n_tasks]
     args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
-    _threads.spread(lambda lo, hi: _fit_indexed(_SUBTREES, lo, hi, *args), len(tasks))
-    _fit_indexed(_ABOVE, 0, 0, *args)
-    _threads.spread(lambda lo, hi: _fit_indexed(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
-    _fit_indexed(_TOP, 0, 0, *args)
+    _threads.spread(lambda lo, hi: fit(_SUBTREES, lo, hi, *args), len(tasks))
+    fit(_ABOVE, 0, 0, *args)
+    _threads.spread(lambda lo, hi: fit(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
+    fit(_TOP, 0, 0, *args)
     return bounds
+
+
+@functools.cache
+def _fit_kernel(merged):
+    """:func:`_fit_indexed`, with merged ranges or without (every node's exact)."""
+    return specialize(_fit_indexed, "merged" if merged else "exact", nogil=True, MERGED=merged)
 
 
 #: The steps of :func:`_fit_step`.
@@ -457,6 +464,17 @@ _BOXES, _FRAMES, _MERGED = 0, 1, 2
 #: children's merged.
 EXACT_RANGES = 512
 assert EXACT_RANGES <= REFIT_SUBTREE
+#: A build of at most this many faces gives every node exact ranges
+#: (:func:`build_ranges`): a millisecond or two more on 65,536 faces, and
+#: a first build compiles no merging.
+EXACT_TREE = 1 << 16
+
+
+def build_ranges(n):
+    """The ``most`` of :func:`fit_indexed` at a build of ``n`` faces: nodes
+    over more faces get merged ranges (every node's exact up to
+    :data:`EXACT_TREE` faces)."""
+    return n if n <= EXACT_TREE else EXACT_RANGES
 
 
 @kernel(nogil=True)
