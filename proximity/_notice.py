@@ -32,11 +32,11 @@ QUIET = "PROXIMITY_QUIET"
 # use compiles (the kernels of that use together, measured cold).
 # The first mesh or scene compiles its broad phase before it knows whether
 # it builds a hierarchy (more than four primitives), which compiles the most:
-# a 20,000-face mesh, 3 to 3.5 s for the build and 1.5 to 1.6 s for its
-# first search, on a loaded machine.
+# a 20,000-face mesh, about 3.3 s for the build and 2.1 to 2.2 s for its
+# first search.
 _BROAD_PHASE = (
     "meshes and scenes (hierarchy build and nearest-face search)",
-    "a few seconds, about 5 s for a first hierarchy and its first search",
+    "a few seconds, about 5.5 s for a first hierarchy and its first search",
 )
 _SIGNS = ("the winding number of signed distances", "about 1 s")
 _SINGLE = ("one-point queries", "about 1 s")
