@@ -367,13 +367,12 @@ def _fit_indexed(
         return _refit_top(child, count, top, tasks, start, end)
     whole = step == _SUBTREES
     # The subtrees' roots (_SUBTREES, _ROOTS), or the nodes above them,
-    # children first (_ABOVE, _TOP: over more than REFIT_SUBTREE >= most
-    # faces, so merged ranges).
+    # children first (_ABOVE, _TOP).
     roots = tasks[lo:hi] if whole or step == _ROOTS else top[::-1]
     for j in range(roots.shape[0]):
         root = roots[j]
         # The rows of the faces whose points the step reads: the subtree's,
-        # or a root's with exact ranges, or none.
+        # or those of a node with exact ranges, or none.
         first, last = start[root], end[root]
         if not whole and (step == _ABOVE or (count[root] == 0 and last - first > most)):
             last = first
@@ -431,9 +430,10 @@ def fit_indexed(vertices, faces, bounds, child, count, kinds, most):
     (``_ABOVE``), the subtrees' roots' frames and ranges (``_ROOTS``: a
     root's frame overwrites its sum, which the nodes above read first) and
     the nodes above (``_TOP``, children first).  Slab ranges are exact for
-    the leaves and the nodes over at most ``most`` faces (at most
-    :data:`REFIT_SUBTREE`), merged from the children's above (see
-    :func:`refit_indexed`).  Nothing is kept of the faces' rows.
+    the leaves and the nodes over at most ``most`` faces, merged from the
+    children's above (see :func:`refit_indexed`); with ``most`` at least
+    the number of faces, every node's are exact, and the fit's kernel is
+    the one without merging.  Nothing is kept of the faces' rows.
     """
     m = len(child)
     # No node holds more than every face: then no range is merged.
