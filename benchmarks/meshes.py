@@ -349,9 +349,13 @@ def run(quick=False, seed=0, log=print):
 
     n_major, n_minor = sizes["build"]
     big_v, big_f = torus(n_major, n_minor)
-    start = time.perf_counter()
-    big = proximity.TriangleMesh(big_v, big_f)
-    build_big = time.perf_counter() - start
+    # The least of two: the first build of a large mesh in a process may
+    # load or compile the fit that merges ranges, which smaller ones do not use.
+    build_big = float("inf")
+    for _ in range(2):
+        start = time.perf_counter()
+        big = proximity.TriangleMesh(big_v, big_f)
+        build_big = min(build_big, time.perf_counter() - start)
     build = {
         "faces_20k": {"faces": len(faces), "seconds": build_20k},
         "large": {
