@@ -456,8 +456,8 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
     present = {p.code: p for tree in trees for p in tree.present}
     present = tuple(present[code] for code in sorted(present))
     kinds = present if len(present) == 1 else primitives.offering(method)
-    width = max(tree.width for tree in trees)
-    culls = reads_cull(method, kinds, width - 1 if width > primitives.N_PARAMS else -1)
+    # The radius column forest gives: any tree's (its rows are padded to one width).
+    culls = reads_cull(method, kinds, max(tree.radius for tree in trees))
     arrays, roots, magnitudes, depth, radius = forest(tuple(trees), loose, culls)
     order = readonly(_visiting_order(points), np.int64)
     search = instances_kernel(method, kinds, radius, len(trees) == 1 and trees[0].indexed)
