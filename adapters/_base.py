@@ -29,7 +29,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 import proximity
-from proximity import Feature, TriangleMesh, primitives
+
+from .. import Feature, TriangleMesh, primitives
 
 EPS = float(np.finfo(np.float64).eps)
 

@@ -66,7 +66,7 @@ run gets an ``n/a`` line.
 uniform in the bounding box of ``n`` triangles scattered in a unit cube,
 for ``n`` from 4 to 256 (one thread, least of 15 calls), and prints the
 largest ``n`` at which brute force is still faster: the basis of
-``proximity.scene.BRUTE_FORCE_MAX``.
+``proximity.shapes.scene.BRUTE_FORCE_MAX``.
 """
 
 import argparse

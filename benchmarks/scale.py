@@ -150,7 +150,7 @@ def main(argv=None):
         block = near_points(rng, BLOCK)
         seconds = reference_seconds(mesh, block)
         reference = BLOCK / min(seconds)
-        raw["numba_layer"] = proximity._threads.layer()
+        raw["numba_layer"] = proximity.runtime.threads.layer()
         blob = pickle.dumps(mesh, protocol=pickle.HIGHEST_PROTOCOL)
         built = []
         originals = broadphase.build_tree, broadphase.build_faces

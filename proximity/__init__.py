@@ -6,11 +6,12 @@ NumPy batches, behind one shape protocol.
 
 from __future__ import annotations
 
+import importlib
 import importlib.machinery
 import os
 import sys
 
-from . import _threads
+from .runtime import threads as _threads
 
 _threads.configure()  # before any kernel: Numba picks its threading layer once
 
@@ -42,14 +43,37 @@ def _map_source_adapters():
 
 _map_source_adapters()
 
-from . import _pool  # noqa: E402
-from ._counts import stats as certified_stats  # noqa: E402
-from ._threads import threads  # noqa: E402
+
+class _MovedModules:
+    """Imports the modules that objects pickled by earlier versions name (``proximity.mesh``,
+    ``proximity.inflated``, ...) as the modules they moved to, so that those pickles load."""
+
+    MOVED = {
+        f"{__name__}.inflated": f"{__name__}.shapes.rounded",
+        f"{__name__}.mesh": f"{__name__}.shapes.mesh",
+        f"{__name__}.posed": f"{__name__}.shapes.posed",
+        f"{__name__}.scene": f"{__name__}.shapes.scene",
+        f"{__name__}.validity": f"{__name__}.signs.validity",
+        f"{__name__}.winding": f"{__name__}.signs.winding",
+    }
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname not in self.MOVED:
+            return None
+        return importlib.machinery.ModuleSpec(fullname, self)
+
+    def create_module(self, spec):
+        return None
+
+    def exec_module(self, module):
+        # The import returns what sys.modules holds for the name once this has run.
+        sys.modules[module.__name__] = importlib.import_module(self.MOVED[module.__name__])
+
+
+sys.meta_path.append(_MovedModules())
+
 from ._typing import ArrayLike, Distances  # noqa: E402
 from ._validate import keyword_only_signature  # noqa: E402
-from .inflated import Capsule, Inflated, Sphere  # noqa: E402
-from .mesh import TriangleMesh  # noqa: E402
-from .posed import Posed  # noqa: E402
 from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
@@ -63,8 +87,14 @@ from .results import (  # noqa: E402
     SegmentResult,
     TriangleResult,
 )
-from .scene import Scene  # noqa: E402
-from .shapes import DEFAULT_METHOD, Circle, Disk, Point, Segment, Shape, Triangle  # noqa: E402
+from .runtime import pool as _pool  # noqa: E402
+from .runtime.counts import stats as certified_stats  # noqa: E402
+from .runtime.threads import threads  # noqa: E402
+from .shapes.base import DEFAULT_METHOD, Circle, Disk, Point, Segment, Shape, Triangle  # noqa: E402
+from .shapes.mesh import TriangleMesh  # noqa: E402
+from .shapes.posed import Posed  # noqa: E402
+from .shapes.rounded import Capsule, Inflated, Sphere  # noqa: E402
+from .shapes.scene import Scene  # noqa: E402
 
 __all__ = [
     "Capsule",
@@ -112,7 +142,7 @@ def _check(shape):
     # (which inspects every attribute): the function form costs what the method does.
     if type(shape) in _SHAPE_TYPES or isinstance(shape, _SHAPES):
         return shape
-    from ._meshlike import looks_like_a_mesh
+    from .shapes.meshlike import looks_like_a_mesh
 
     hint = "; use proximity.TriangleMesh(mesh) first" if looks_like_a_mesh(shape) else ""
     raise TypeError(
@@ -251,7 +281,7 @@ def distance(
 
 
 def _pair_queries():
-    from . import pair_queries
+    from .pair import queries as pair_queries
 
     return pair_queries
 
@@ -291,7 +321,7 @@ def closest_points(
         primitives), except between touching or overlapping shapes, where
         the search stops at the first common point it finds.  Posed views
         add the rounding of the pose, a few ``eps`` of the coordinates'
-        magnitude (see :mod:`proximity.posed`).
+        magnitude (see :mod:`proximity.shapes.posed`).
     max_distance : float, keyword-only, optional
         Nothing within it: ``inf`` distance, NaN points, feature ``NONE``
         and index -1 for pairs farther apart.  It prunes the search of
@@ -387,7 +417,7 @@ def hausdorff_distance(
     its maximum over a triangle is at a vertex; and ``d(., b)`` is
     1-Lipschitz).  A branch and bound splits the faces of ``a`` where the
     two bounds disagree, until ``upper - lower <= rtol * upper`` (see
-    :mod:`proximity.hausdorff`).
+    :mod:`proximity.pair.hausdorff`).
 
     Parameters
     ----------
@@ -471,7 +501,7 @@ def hausdorff_distance(
             "hausdorff_distance() takes two positional arguments, a and b; the options are keyword-only: "
             f"hausdorff_distance(a, b, rtol={args[0]!r})"
         )
-    from . import hausdorff
+    from .pair import hausdorff
 
     return hausdorff.hausdorff_distance(
         a, b, directed=directed, rtol=rtol, atol=atol, method=method, max_points=max_points

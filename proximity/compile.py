@@ -1,7 +1,7 @@
 """Compile every kernel ahead of time: ``python -m proximity.compile``.
 
 A query compiles the kernels it uses at its first call and keeps them in
-the disk cache (see :mod:`proximity._cache`).  Containers and CI images that
+the disk cache (see :mod:`proximity.runtime.cache`).  Containers and CI images that
 should answer their first query at once run this command after installing,
 where the cache is writable, to compile every method of every shape and
 path.  It prints each kernel as it is done.
@@ -9,7 +9,7 @@ path.  It prints each kernel as it is done.
 Without it, the first query of a process that finds a kernel missing from
 the cache prints one line on stderr saying what it compiles and roughly how
 long that takes; ``PROXIMITY_QUIET=1`` in the environment silences it (see
-:mod:`proximity._notice`).
+:mod:`proximity.runtime.notice`).
 
 Examples
 --------
@@ -40,9 +40,9 @@ def _kernel_modules():
 
 def _jobs(method):
     """``(description, function)`` for each kernel of ``method``."""
-    from . import _batch
-    from ._loops import single_entry
     from .broadphase.traverse import search_kernel
+    from .runtime import batch
+    from .runtime.loops import single_entry
 
     m = _methods.resolve(method)
     name = m.name
@@ -53,9 +53,9 @@ def _jobs(method):
         jobs += [
             (f"{kinds}: {name}, one point", lambda module=module: single_entry(module.single_kernel(m))),
             (f"{kinds}: {name}, pairs",
-             lambda module=module: _batch.batch_kernel(module.LAYOUT, module.block(m, False))),
+             lambda module=module: batch.batch_kernel(module.LAYOUT, module.block(m, False))),
             (f"{kinds}: {name}, many points against one shape",
-             lambda module=module: _batch.batch_kernel(module.LAYOUT, module.block(m, True))),
+             lambda module=module: batch.batch_kernel(module.LAYOUT, module.block(m, True))),
         ]  # fmt: skip
     for p in primitives.offering(m):
         jobs.append((f"collection of {p.name}s: {name}", lambda p=p: search_kernel(m, (p,))))
@@ -94,7 +94,7 @@ def _broad_phase():
 def _winding():
     """The signs of the signed distance: the winding number's hierarchy, series and ray
     crossings, and the validity check (its predicates and pair tests)."""
-    from .mesh import TriangleMesh
+    from .shapes.mesh import TriangleMesh
 
     faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     tetrahedron = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], faces)
@@ -105,11 +105,11 @@ def _winding():
 
 def _round_frames():
     """The unit normals and checks of large batches of circles and disks."""
-    from . import point_disk
+    from .point import disk
 
     one = np.ones((1, 3))
     one.flags.writeable = False  # as the shapes' arrays are
-    point_disk.round_frames(one, one, one[0, :1], np.empty((1, 3)))
+    disk.round_frames(one, one, one[0, :1], np.empty((1, 3)))
 
 
 def compile_all(methods=None, log=sys.stdout):
@@ -160,9 +160,9 @@ def parser():
 def main(argv=None):
     """Run ``python -m proximity.compile``; returns its exit status."""
     args = parser().parse_args(argv)
-    from . import _cache
+    from .runtime import cache
 
-    if not _cache.CACHE:
+    if not cache.CACHE:
         print("no writable cache directory: compiled kernels cannot be kept", file=sys.stderr)
         return 1
     start = time.perf_counter()

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _lazy
+from .runtime import lazy
 
 #: Rows answered side by side by a ``row_batch`` (see the module docstring):
 #: the width of the vector units' float64 lanes on current x86 (AVX2), and
@@ -116,26 +116,26 @@ class Primitive:
     @property
     def kernels(self):
         """Its kernel module (importing it loads the compiler, under
-        :func:`proximity._lazy.load`'s lock)."""
-        return _lazy.load(f"proximity.{self.module}")
+        :func:`proximity.runtime.lazy.load`'s lock)."""
+        return lazy.load(f"proximity.{self.module}")
 
     def __repr__(self):
         return f"Primitive({self.name!r})"
 
 
-TRIANGLE = Primitive("triangle", 0, 9, 3, "point_triangle", (("barycentric", 3),), points=(0, 3, 6))
+TRIANGLE = Primitive("triangle", 0, 9, 3, "point.triangle", (("barycentric", 3),), points=(0, 3, 6))
 # A disk's and a circle's row: center, unit normal, normal as given, radius.
 DISK = Primitive(
-    "disk", 1, 10, 0, "point_disk", (("height", 1), ("radial", 1)), axis=3, points=(0,), directions=(3, 6)
+    "disk", 1, 10, 0, "point.disk", (("height", 1), ("radial", 1)), axis=3, points=(0,), directions=(3, 6)
 )
 CIRCLE = Primitive(
-    "circle", 2, 10, 0, "point_disk", (("height", 1), ("radial", 1), ("equidistant", 0)),
+    "circle", 2, 10, 0, "point.disk", (("height", 1), ("radial", 1), ("equidistant", 0)),
     axis=3, points=(0,), directions=(3, 6),
 )  # fmt: skip
 SEGMENT = Primitive(
-    "segment", 3, 6, 2, "point_segment", (("parameter", 1),), ("robust", "certified"), points=(0, 3)
+    "segment", 3, 6, 2, "point.segment", (("parameter", 1),), ("robust", "certified"), points=(0, 3)
 )
-POINT = Primitive("point", 4, 3, 1, "point_point", (), ("robust", "certified"), points=(0,))
+POINT = Primitive("point", 4, 3, 1, "point.point", (), ("robust", "certified"), points=(0,))
 
 #: Every primitive, by name, in code order.
 REGISTRY = {p.name: p for p in (TRIANGLE, DISK, CIRCLE, SEGMENT, POINT)}

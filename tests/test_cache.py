@@ -136,7 +136,7 @@ def test_without_numba_s_private_cache_kernels_compile_in_memory(monkeypatch):
     """Where Numba's dispatchers no longer hold their cache where
     ``_guard_numba_cache`` looks, kernels are compiled without a disk cache,
     with one warning, rather than with an unguarded one."""
-    from proximity import _cache
+    from proximity.runtime import cache as _cache
 
     assert not _cache._guard_numba_cache(object())
     monkeypatch.setattr(_cache, "CACHE", True)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from numba import njit
 
-from proximity import Triangle, point_triangle
+from proximity import Triangle
+from proximity.point import triangle as point_triangle
 from proximity.testing import scenes
 
 

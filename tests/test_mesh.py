@@ -10,7 +10,7 @@ import proximity
 from proximity import Feature, TriangleMesh, broadphase
 from proximity.broadphase import build as build_module
 from proximity.broadphase import refit as refit_module
-from proximity.scene import BRUTE_FORCE_MAX
+from proximity.shapes.scene import BRUTE_FORCE_MAX
 from proximity.testing import exact
 from proximity.testing.meshes import box_points, icosphere, near_points, soup, torus
 
@@ -126,7 +126,7 @@ def test_leaves_answered_side_by_side_answer_as_each_face_alone(leaf_size):
     1e-200 to 1 around the origin, and points at every such distance, so
     that one group of faces holds both; leaves of any size (None: one leaf,
     brute force), faces from rows or read through their vertices."""
-    from proximity._fp import SAFE_MIN
+    from proximity.numerics.fp import SAFE_MIN
 
     rng = np.random.default_rng(17)
     scales = 10.0 ** rng.uniform(-200, 0, (400, 1))

@@ -12,7 +12,7 @@ through small ``numba.njit`` batch loops.  For every pair of shapes:
 * ``certified``, wherever it answers CERTAIN, is within one ulp of ``d*``
   with the exact lowest feature pair, and exactly 0 with one common point
   where the shapes touch;
-* the exact fallback (``proximity._exact``) always is, with the reference's
+* the exact fallback (``proximity.numerics.exact``) always is, with the reference's
   witnesses correctly rounded.
 
 on seeded scenes of every pair family of ``proximity/testing/scenes.py``, on
@@ -28,8 +28,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from numba import literal_unroll, njit
 
-from proximity import _exact, certified, segment_segment, segment_triangle, triangle_triangle
-from proximity._jit import specialize
+from proximity.numerics import certified
+from proximity.numerics import exact as _exact
+from proximity.pair import segment_segment, segment_triangle, triangle_triangle
+from proximity.runtime.jit import specialize
 from proximity.testing import exact, scenes
 from proximity.testing.exact import Feature
 from proximity.testing.exact import _core as exact_core

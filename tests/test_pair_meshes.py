@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import pair_queries
+from proximity.pair import queries as pair_queries
 from proximity.testing import exact, meshes
 
 EPS = 2.0**-52

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import Feature, certified
+from proximity import Feature
+from proximity.numerics import certified
 from proximity.testing import exact, scenes
 from tests.test_pair_kernels import SPECS, check_certified, check_robust
 

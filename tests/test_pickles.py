@@ -1,14 +1,15 @@
 """Objects pickled by an earlier version of the package load, and answer as fresh ones do.
 
 ``data/pickles.pkl`` was written by ``data/make_pickles.py`` with the package as it stood before
-its modules moved into folders (the pickles name ``proximity.shapes``, ``proximity.mesh``,
-``proximity.inflated``, ``proximity.posed``, ``proximity.scene`` and ``proximity.results``).
+its modules moved into folders: the pickles name the modules of that layout (``shapes``, ``mesh``,
+``inflated``, ``posed``, ``scene`` and ``results``, each under ``proximity``).
 """
 
 import dataclasses
 import importlib.util
 import pathlib
 import pickle
+import pickletools
 
 import numpy as np
 import pytest
@@ -36,8 +37,8 @@ def _same(x, y):
 
 def test_the_file_holds_every_object():
     assert sorted(LOADED) == sorted(FRESH)
-    old = {arg.split(".", 2)[1] for op, arg, _ in __import__("pickletools").genops((DATA / "pickles.pkl").read_bytes())
-           if isinstance(arg, str) and arg.startswith("proximity.")}  # fmt: skip
+    ops = pickletools.genops((DATA / "pickles.pkl").read_bytes())
+    old = {arg.split(".", 2)[1] for _, arg, _ in ops if isinstance(arg, str) and arg.startswith("proximity.")}
     # The modules the file names are those of the earlier layout.
     assert {"shapes", "mesh", "inflated", "posed", "scene", "results"} <= old
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import _pool
+from proximity.runtime import pool as _pool
 
 N = 100_000  # 800 kB a column: every (N, 3) output is recycled, (N,) ones are not
 FIELDS = ("point", "barycentric")

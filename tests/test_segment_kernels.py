@@ -1,4 +1,4 @@
-"""The point-segment kernels of ``proximity.point_segment`` against the exact reference.
+"""The point-segment kernels of ``proximity.point.segment`` against the exact reference.
 
 ``robust`` within ``8 eps S + 2^-1075`` (``S = max |P - V_i|``) with its
 closest point on the segment; ``certified`` within one ulp with the exact
@@ -16,9 +16,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from proximity import _exact, point_segment
-from proximity._fp import SAFE_MAX, SAFE_MIN, UNSCALED
-from proximity.certified import CERTAIN, EXACT
+from proximity.numerics import exact as _exact
+from proximity.numerics.certified import CERTAIN, EXACT
+from proximity.numerics.fp import SAFE_MAX, SAFE_MIN, UNSCALED
+from proximity.point import segment as point_segment
 from proximity.testing import exact
 from tests import checks
 
@@ -55,8 +56,8 @@ def _certified_rows(q):
 @numba.njit
 def _block_rows(q):
     """The robust method as a batch block runs it: ``robust_local`` on the
-    differences where :func:`~proximity.point_segment.window` says they are
-    safe, :func:`~proximity.point_segment.robust` on the others."""
+    differences where :func:`~proximity.point.segment.window` says they are
+    safe, :func:`~proximity.point.segment.robust` on the others."""
     out = np.empty((q.shape[0], 7))
     safe = np.empty(q.shape[0], np.bool_)
     for k in range(q.shape[0]):

@@ -12,7 +12,8 @@ import pickle
 import numpy as np
 import pytest
 
-from proximity import TriangleMesh, _signed
+from proximity import TriangleMesh
+from proximity.signs import signed as _signed
 from proximity.testing import exact
 from proximity.testing.meshes import box_points, near_points
 

@@ -151,11 +151,11 @@ def test_a_cold_compile_says_so_once_and_a_warm_run_says_nothing(tmp_path):
 
 
 def test_the_compile_line_is_printed_once_and_can_be_silenced(monkeypatch, capsys):
-    from proximity import _notice
+    from proximity.runtime import notice as _notice
 
     def _robust_block__robust__e1b9(): ...
 
-    _robust_block__robust__e1b9.__module__ = "proximity.point_triangle"
+    _robust_block__robust__e1b9.__module__ = "proximity.point.triangle"
     monkeypatch.setattr(_notice, "_said", False)
     monkeypatch.setenv("PROXIMITY_QUIET", "0")
     _notice.compiling(_robust_block__robust__e1b9)
@@ -169,8 +169,8 @@ def test_the_compile_line_is_printed_once_and_can_be_silenced(monkeypatch, capsy
 
 
 def test_the_compile_line_names_the_hierarchy_for_meshes():
-    from proximity import _notice
     from proximity.broadphase import build
+    from proximity.runtime import notice as _notice
 
     what, seconds = _notice.describe(build.build_tree)
     assert what.startswith("kernels of meshes and scenes") and seconds

@@ -10,7 +10,8 @@ import warnings
 import numpy as np
 import pytest
 
-from proximity import TriangleMesh, validity
+from proximity import TriangleMesh
+from proximity.signs import validity
 from proximity.testing import winding as exact_winding
 from proximity.testing.meshes import box, defective, icosphere, near_points
 

@@ -10,7 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from proximity import TriangleMesh, crossings, winding
+from proximity import TriangleMesh
+from proximity.signs import crossings, winding
 from proximity.testing import winding as exact_winding
 from proximity.testing.meshes import box, box_points, defective, icosphere, near_points, torus
 

@@ -3,7 +3,7 @@
 import numpy as np
 from numba import prange
 
-from .._jit import kernel
+from ..runtime.jit import kernel
 
 #: From this many rows on, :func:`take_rows` and :func:`triangle_params`
 #: (in the faces' own order) gather by compiled parallel loops; below, by

@@ -69,9 +69,10 @@ import math
 
 import numpy as np
 
-from .. import _threads, primitives
-from .._fp import EPS
-from .._jit import inline, kernel, spliced
+from .. import primitives
+from ..numerics.fp import EPS
+from ..runtime import threads
+from ..runtime.jit import inline, kernel, spliced
 from ._alloc import empty, readonly
 
 SLACK = 256.0 * EPS  # pruning slack, in units of the query's magnitude M (see the module docstring)
@@ -150,7 +151,7 @@ def _scale(px, py, pz, magnitude):
 def plane_row(cull, k, x0, y0, z0, x1, y1, z1, x2, y2, z2):
     """Row ``k`` of :func:`primitive_cull` for the hull of three points (a
     triangle): their box, and the slab of their plane's normal, shortened as
-    :func:`proximity.point_disk.shorter_than_one` does (none where they are collinear)."""
+    :func:`proximity.point.disk.shorter_than_one` does (none where they are collinear)."""
     cull[k, 0], cull[k, 3] = min(min(x0, x1), x2), max(max(x0, x1), x2)
     cull[k, 1], cull[k, 4] = min(min(y0, y1), y2), max(max(y0, y1), y2)
     cull[k, 2], cull[k, 5] = min(min(z0, z1), z2), max(max(z0, z1), z2)
@@ -300,7 +301,7 @@ def stored_cull(cull, empty=np.empty):
     """
     out = empty(cull.shape, np.float32)
     cull = readonly(cull, np.float64)
-    _threads.spread(lambda lo, hi: _stored_rows(cull, out, lo, hi), len(cull), _STORED_CHUNK)
+    threads.spread(lambda lo, hi: _stored_rows(cull, out, lo, hi), len(cull), _STORED_CHUNK)
     return out
 
 

@@ -18,8 +18,9 @@ import math
 
 import numpy as np
 
-from .. import _threads, primitives
-from .._jit import inline, kernel, spliced
+from .. import primitives
+from ..runtime import threads
+from ..runtime.jit import inline, kernel, spliced
 from ._alloc import GATHER_MIN, INDEX, check_size, empty, empty_ints, indices, readonly, take_rows
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row, primitive_cull, stored_cull
 from .refit import NODE_COLUMNS, build_ranges, fit_indexed, refit, refit_faces, refit_indexed
@@ -299,7 +300,7 @@ def _build(rows, leaf_size):
     are adjacent and come after it.
 
     The steps are one serial kernel (:func:`_build_step`), run side by side
-    on Python threads (:func:`proximity._threads.spread`): a kernel of
+    on Python threads (:func:`proximity.runtime.threads.spread`): a kernel of
     parallel loops takes seconds longer to compile, at the first build on
     a machine.
     """
@@ -327,7 +328,7 @@ def _build(rows, leaf_size):
         nodes = begin + np.flatnonzero(count[begin:n_nodes] > large)
         firsts = n_nodes + 2 * np.arange(len(nodes), dtype=np.int64)
         begin, n_nodes = n_nodes, n_nodes + 2 * len(nodes)
-        _threads.spread(
+        threads.spread(
             lambda lo, hi, nodes=nodes, firsts=firsts: run(_LEVEL, nodes, firsts, lo, hi), len(nodes)
         )
     # The depth of each of those nodes (a node comes before its children),
@@ -341,7 +342,7 @@ def _build(rows, leaf_size):
     blocks = (empty_ints(2 * n), empty_ints(2 * n))
     made = np.empty(len(roots), np.int64)
     below = np.empty(len(roots), np.int64)
-    _threads.spread(
+    threads.spread(
         lambda lo, hi: run(_SUBTREES, roots, none, lo, hi, blocks, made, below), len(roots), _SUBTREE_CHUNK
     )
     # Each subtree's nodes but its root after the large nodes, block after block.
@@ -352,7 +353,7 @@ def _build(rows, leaf_size):
     out = (empty_ints(total), empty_ints(total))
     out[0][:n_nodes] = top_child
     out[1][:n_nodes] = top_count
-    _threads.spread(
+    threads.spread(
         lambda lo, hi: run(_NUMBER, roots, offset, lo, hi, blocks, made, below, out),
         len(roots),
         _NUMBER_CHUNK,
@@ -484,7 +485,7 @@ _NO_PARAMS = np.empty((0, primitives.N_PARAMS))
 def _faces(step, vertices, faces, order, kind, cull, hashes, params, n):
     """:func:`_face_step` over ``n`` faces, on the threads."""
     bits = vertices.view(np.uint64)  # here: a view in a kernel compiles a function of its own
-    _threads.spread(
+    threads.spread(
         lambda lo, hi: _face_step(step, lo, hi, vertices, bits, faces, order, kind, cull, hashes, params),
         n,
         _FACE_CHUNK,

@@ -12,11 +12,11 @@ the farthest of a mesh's vertices or of the corners of its leaves' boxes:
 unlike the box, it does not grow when the instance turns).
 It then visits the instances nearest first by that bound, moves the point
 into each one's frame (``R^T (P - t)``, summed as
-:func:`proximity.posed.to_local` sums it) and runs the prototype's search
+:func:`proximity.shapes.posed.to_local` sums it) and runs the prototype's search
 there (:func:`.traverse._descend`), with the best answer so far as its
 cutoff, until the nearest bound left exceeds the best answer.  Distances
 are the same in every frame (the poses are rigid, within
-:data:`proximity.posed.RIGID_TOLERANCE`), so the best over the instances is
+:data:`proximity.shapes.posed.RIGID_TOLERANCE`), so the best over the instances is
 the answer; ties go to the lowest index, the instances numbering their
 primitives one after the other.
 
@@ -44,9 +44,9 @@ import numpy as np
 from numba.core import types
 
 from .. import primitives
-from .._jit import launcher, part, specialize
-from .._loops import PAIR_ROWS
 from ..primitives import LANES
+from ..runtime.jit import launcher, part, specialize
+from ..runtime.loops import PAIR_ROWS
 from ._alloc import indices, readonly
 from .bounds import CULL_COLUMNS
 from .traverse import (
@@ -418,7 +418,7 @@ def instance_arrays(trees, prototype, rotation, translation, offset, loose=False
 
 def _moved(corners, rotation, translation):
     """Corners ``(n, 8, 3)``, those of instance ``i`` moved by its pose (summed as
-    :func:`proximity.posed.to_world` sums)."""
+    :func:`proximity.shapes.posed.to_world` sums)."""
     out = np.empty_like(corners)
     for a in range(3):
         out[..., a] = (
@@ -474,7 +474,7 @@ def _resolve(trees, instances, rows, points, out, full, loose, cutoff):
     """Rows whose nearest primitive may be an undecided certified answer:
     each instance near enough resolves its candidates in its own frame
     (:func:`.nearest._resolve` on a copy of the row), the least wins."""
-    from ..posed import to_local, to_world
+    from ..shapes.posed import to_local, to_world
     from .nearest import _resolve as resolve_tree
 
     for i in rows:

@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 from .. import primitives
-from .._rounding import certify_difference
+from ..numerics.rounding import certify_difference
 from ._alloc import readonly
 from .traverse import Outputs, TreeArrays, _gather, reads_cull, search_kernel
 

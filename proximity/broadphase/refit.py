@@ -11,8 +11,9 @@ import math
 
 import numpy as np
 
-from .. import _pool, _threads, primitives
-from .._jit import inline, kernel, specialize, spliced
+from .. import primitives
+from ..runtime import pool, threads
+from ..runtime.jit import inline, kernel, specialize, spliced
 from ._alloc import INDEX, empty, empty_ints, readonly, take_rows_into
 from .bounds import CULL_COLUMNS, FACE_COLUMNS, plane_row
 
@@ -443,9 +444,9 @@ def fit_indexed(vertices, faces, bounds, child, count, kinds, most):
     n_top, n_tasks = fit(_TASKS, 0, 0, *args)
     top, tasks = top[:n_top], tasks[:n_tasks]
     args = (most, vertices, faces, bounds, top, tasks, start, end, child, count, kinds, _VERTICES)
-    _threads.spread(lambda lo, hi: fit(_SUBTREES, lo, hi, *args), len(tasks))
+    threads.spread(lambda lo, hi: fit(_SUBTREES, lo, hi, *args), len(tasks))
     fit(_ABOVE, 0, 0, *args)
-    _threads.spread(lambda lo, hi: fit(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
+    threads.spread(lambda lo, hi: fit(_ROOTS, lo, hi, *args), len(tasks), _ROOTS_CHUNK)
     fit(_TOP, 0, 0, *args)
     return bounds
 
@@ -562,10 +563,10 @@ def refit(child, count, kinds, params, cull, normals=None):
     # ranges of nodes cut at about equal sums of those (the root alone may be one).
     sizes = end - start
     cost = np.cumsum(np.where((count > 0) | (sizes <= most), sizes, 0))
-    pieces = _FRAME_RANGES_PER_THREAD * _threads.current()
+    pieces = _FRAME_RANGES_PER_THREAD * threads.current()
     cuts = np.searchsorted(cost, cost[-1] * np.arange(1, pieces) / pieces, side="right")
     cuts = np.unique(np.concatenate([[0], cuts, [m]]))
-    _threads.spread(
+    threads.spread(
         lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], most, bounds, *tree), len(cuts) - 1
     )
     if count[0] == 0 and sizes[0] > most:
@@ -593,8 +594,8 @@ def refit_faces(vertices, faces, order, child, count, kinds):
     faces' vertices moved: the rows of ``faces[order]`` of ``vertices``, their
     cull rows and the leaf's bounds (see :func:`refit_indexed` for trees of
     more nodes)."""
-    params = _pool.empty((len(order), FACE_COLUMNS))
-    cull = _pool.empty((len(order), CULL_COLUMNS))
+    params = pool.empty((len(order), FACE_COLUMNS))
+    cull = pool.empty((len(order), CULL_COLUMNS))
     vertices, faces, order = (
         readonly(vertices, np.float64),
         readonly(faces, np.int64),
@@ -621,13 +622,13 @@ def refit_indexed(vertices, tree):
     few ``eps`` and the projections round by a few ``eps`` of the box's
     magnitude, which the ``2^-36`` widening covers many times over.
     """
-    # On recycled memory (:mod:`proximity._pool`): a refit per frame writes
+    # On recycled memory (:mod:`proximity.runtime.pool`): a refit per frame writes
     # over the memory of the frame before, once that mesh is gone, rather than
     # the system's fresh pages, whose first writes cost as much as the refit.
     sources = readonly(tree.sources, np.int64)
-    rows = _pool.empty((len(sources), 3))
+    rows = pool.empty((len(sources), 3))
     take_rows_into(readonly(vertices, np.float64), sources, rows)
-    bounds = _pool.empty((len(tree.child), NODE_COLUMNS))
+    bounds = pool.empty((len(tree.child), NODE_COLUMNS))
     rows = readonly(rows, np.float64)
     fit_indexed(rows, tree.faces, bounds, tree.child, tree.count, tree.kinds, 0)
     bounds = readonly(bounds, np.float64)

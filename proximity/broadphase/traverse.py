@@ -40,11 +40,11 @@ import math
 import numpy as np
 from numba.core import types
 
-from .. import certified
-from .._fp import EPS, faithful_difference
-from .._jit import inline, kernel, launcher, specialize
-from .._loops import PAIR_OUT, PAIR_ROWS
+from ..numerics import certified
+from ..numerics.fp import EPS, faithful_difference
 from ..primitives import LANES
+from ..runtime.jit import inline, kernel, launcher, specialize
+from ..runtime.loops import PAIR_OUT, PAIR_ROWS
 from .bounds import SLACK, _bound_sqr, _box_sqr, _culled, _scale, _slabs_sqr
 
 BLOCK = 64  # points per block function call
@@ -99,7 +99,7 @@ def _signatures(tree):
 
 _SIGNATURES = {False: _signatures(_TREE), True: _signatures(_INDEXED_TREE)}
 
-# Bound per method and set of kinds by :func:`proximity._jit.specialize`:
+# Bound per method and set of kinds by :func:`proximity.runtime.jit.specialize`:
 # the primitives' evaluation and interval (chains over the kinds, see
 # :func:`_chain`), whether the method has an exact fallback, and whether the
 # previous point's answer may seed the search; where a tree of one kind
@@ -357,7 +357,7 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
 def _rounded(r, radius, px, py, pz, certify):
     """A primitive's answer ``r`` for the primitive rounded by ``radius``:
     ``d - radius`` (the closest point stays the core's: the caller moves it
-    to the rounded surface, :func:`proximity._rounding.surface_points`).
+    to the rounded surface, :func:`proximity.numerics.rounding.surface_points`).
     ``certify``: the status is ``EXACT`` where ``d - radius`` is not known
     to be faithful."""
     st, d, sqr, x, y, z, f, a0, a1, a2, flag = r

@@ -13,7 +13,8 @@ from collections.abc import Callable
 import numpy as np
 
 import proximity
-from proximity import primitives
+
+from .. import primitives
 
 _TRIANGLE = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _SEGMENT = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.25]])

@@ -145,7 +145,7 @@ def reference_inside(kind, size, vertices, faces, points):
 
     Returns ``(inside, by_winding)``, boolean arrays.
     """
-    from proximity import _signed
+    from ..signs import signed
 
     if kind == "icosphere":
         tri = vertices[faces]
@@ -164,7 +164,7 @@ def reference_inside(kind, size, vertices, faces, points):
     rows = np.flatnonzero(doubt)
     if len(rows):
         mesh = proximity.TriangleMesh(vertices, faces, broad_phase="brute")
-        inside[rows] = _signed.winding_numbers(mesh.vertices, mesh.faces, points[rows]) > 0.5
+        inside[rows] = signed.winding_numbers(mesh.vertices, mesh.faces, points[rows]) > 0.5
     return inside, doubt
 
 

@@ -17,8 +17,8 @@ import numba
 import numpy as np
 
 import proximity
-from proximity.results import asdict
 
+from ..results import asdict
 from . import examples
 from .meshes import icosphere
 
@@ -87,9 +87,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     out = answers(args.method)
     np.savez(args.out, **out)
-    from proximity import _jit
+    from ..runtime import jit
 
-    calls = "through their addresses" if _jit.BY_ADDRESS else f"directly ({_jit.ADDRESS_ERROR!r:.120})"
+    calls = "through their addresses" if jit.BY_ADDRESS else f"directly ({jit.ADDRESS_ERROR!r:.120})"
     print(f"numba {numba.__version__}, numpy {np.__version__}: {len(out)} arrays; blocks called {calls}")
     if args.compare:
         reference = dict(np.load(args.compare))

@@ -2,7 +2,7 @@
 
 Signed crossings of a ray, counted in rational arithmetic (``Fraction`` of
 each float's exact value) where a float filter cannot decide: it shares no
-code with :mod:`proximity.winding` or :mod:`proximity.crossings`, whose
+code with :mod:`proximity.signs.winding` or :mod:`proximity.signs.crossings`, whose
 answers it judges.
 """
 

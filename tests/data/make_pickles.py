@@ -41,8 +41,11 @@ def objects(proximity):
         "posed": mesh.transformed(pose),
         "scene": proximity.Scene([mesh, proximity.Sphere([4.0, 0.0, 0.0], 1.0), mesh.transformed(pose)]),
     }
-    results = {f"{name} result": shape.closest_point(QUERIES[:, None] if name in ("triangle", "inflated") else QUERIES)
-               for name, shape in shapes.items()}
+    batched = ("triangle", "inflated")  # batches of two: the points broadcast against them
+    results = {
+        f"{name} result": shape.closest_point(QUERIES[:, None] if name in batched else QUERIES)
+        for name, shape in shapes.items()
+    }
     results["pair result"] = proximity.closest_points(shapes["segment"], mesh)
     return {**shapes, **results}
 

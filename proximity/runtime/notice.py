@@ -1,0 +1,96 @@
+"""The line a cold first query prints while it compiles.
+
+A query compiles its kernels at its first use on a machine and keeps them
+in the disk cache (:mod:`proximity.runtime.cache`); until then a first mesh query
+takes seconds (most of them in the hierarchy's build), with nothing else
+to show for it, and a notebook looks hung.  So the first kernel of a
+process that is not in the disk cache prints one line on stderr: what is
+compiling, roughly how long it takes, and the command that compiles every
+kernel ahead.  Later compiles of the same process print nothing, and a
+process whose kernels are all cached prints nothing at all.
+
+Every kernel's compile takes from a fraction of a second to a few seconds
+of one core, plus about a second for the compiler's own start in a new
+process, and a first query compiles several: so every cold first query
+takes more than about a second, and each one announces itself.
+
+Set the environment variable ``PROXIMITY_QUIET`` (to anything but ``""``
+or ``"0"``) to silence the line; it is read when the line would be
+printed, so setting ``os.environ["PROXIMITY_QUIET"] = "1"`` in a running
+process works too.
+"""
+
+import os
+import sys
+import threading
+
+#: The environment variable that silences the line.
+QUIET = "PROXIMITY_QUIET"
+
+# What a first use compiles, from where its first kernel that misses the
+# cache is defined, and roughly how many seconds of one core the whole first
+# use compiles (the kernels of that use together, measured cold).
+# The first mesh or scene compiles its broad phase before it knows whether
+# it builds a hierarchy (more than four primitives), which compiles the most:
+# a 20,000-face mesh, about 3.3 s for the build and 2.1 to 2.2 s for its
+# first search.
+_BROAD_PHASE = (
+    "meshes and scenes (hierarchy build and nearest-face search)",
+    "a few seconds, about 5.5 s for a first hierarchy and its first search",
+)
+_SIGNS = ("the winding number of signed distances", "about 1 s")
+_SINGLE = ("one-point queries", "about 1 s")
+_BATCH = ("batch queries", "about 2 to 5 s")
+
+_lock = threading.Lock()
+_said = False
+
+
+def quiet():
+    """Whether the line is silenced (:data:`QUIET` is set, and not to ``"0"``)."""
+    return os.environ.get(QUIET, "") not in ("", "0")
+
+
+def _method(name):
+    """The method whose kernel ``name`` is (a specialised kernel's name holds it), or ``""``."""
+    from ..methods import REGISTRY
+
+    parts = name.split("__")
+    return next((m for m in REGISTRY if m in parts), "")
+
+
+def describe(func):
+    """``(what, how long)`` for a first use whose first uncached kernel is ``func``."""
+    module = getattr(func, "__module__", "") or ""
+    name = getattr(func, "__qualname__", "") or ""
+    if module.startswith("proximity.broadphase"):
+        what, seconds = _BROAD_PHASE
+    elif module == "proximity.signs.signed":
+        what, seconds = _SIGNS
+    elif name.startswith("_single"):
+        what, seconds = _SINGLE
+    else:
+        what, seconds = _BATCH
+    method = _method(name)
+    return (f"{method} kernels of {what}" if method else f"kernels of {what}"), seconds
+
+
+def compiling(func):
+    """Print the line, the first time in this process, for a compile of the kernel ``func``."""
+    global _said
+    if _said:
+        return
+    with _lock:
+        if _said:
+            return
+        _said = True
+    if quiet():
+        return
+    what, seconds = describe(func)
+    print(
+        f"proximity: compiling the {what}, once for this machine ({seconds}; later runs "
+        f"load them from the disk cache).  Run `python -m proximity.compile` to compile them all ahead; "
+        f"set {QUIET}=1 to hide this line.",
+        file=sys.stderr,
+        flush=True,
+    )

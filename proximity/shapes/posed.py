@@ -1,0 +1,277 @@
+"""Posed views: a shape moved by a rigid transform, sharing the shape's data.
+
+``shape.transformed(T)`` returns a :class:`Posed` view in O(1): no copy of
+the vertices, no new hierarchy.  A query moves its points into the shape's
+own frame, ``R^T (P - t)``, asks the shape, and moves the closest points
+(and normals) back, ``R X + t``; distances, features and parameters are
+the shape's.  A scene of posed views of one mesh shares the mesh's
+hierarchy (instancing, :class:`proximity.Scene`).
+
+Accuracy.  The transform ``T = [[R, t], [0, 1]]`` is rigid when ``R`` is
+orthonormal with determinant +1; it is accepted when ``max |R^T R - I|``,
+``e_R``, is at most :data:`RIGID_TOLERANCE`.  The answer is the shape's
+own, within its bound, for the point ``R^T (P - t)`` as computed in floating
+point, which is within ``3 eps |P - t|`` of the exact one; and the shape
+posed by ``T`` exactly is within ``e_R |P - t|`` of the one posed rigidly.
+So ``robust`` is within ``8 eps S + 2^-1075 + (3 eps + e_R) |P - t|`` of
+the exact distance to the posed shape, ``S`` the shape's own size of the
+query; ``certified`` is faithfully rounded for the moved point (not for the
+exactly posed shape, which is not representable in floating point: its
+vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._typing import ArrayLike, Bools, Distances, Floats, Transform
+from .._validate import as_float64, freeze_result, frozen
+from ..results import asdict, attach, format_repr
+from .base import DEFAULT_METHOD, Frozen, keyword_only
+
+if TYPE_CHECKING:
+    from ..results import Result
+    from .base import Shape
+    from .rounded import Inflated
+
+__all__ = ["RIGID_TOLERANCE", "Posed", "rigid"]
+
+#: The largest ``max |R^T R - I|`` of a transform accepted as rigid.
+RIGID_TOLERANCE = 1e-9
+
+
+def to_local(points, rotation, translation):
+    """``R^T (P - t)`` of ``(..., 3)`` points, summed in a fixed order (as the
+    instanced search computes it, so that both give the same bits)."""
+    d = points - translation
+    x = d[..., 0] * rotation[0, 0] + d[..., 1] * rotation[1, 0] + d[..., 2] * rotation[2, 0]
+    y = d[..., 0] * rotation[0, 1] + d[..., 1] * rotation[1, 1] + d[..., 2] * rotation[2, 1]
+    z = d[..., 0] * rotation[0, 2] + d[..., 1] * rotation[1, 2] + d[..., 2] * rotation[2, 2]
+    return np.stack([x, y, z], axis=-1)
+
+
+def to_world(points, rotation, translation):
+    """``R X + t`` of ``(..., 3)`` points, summed in a fixed order."""
+    x = points[..., 0] * rotation[0, 0] + points[..., 1] * rotation[0, 1] + points[..., 2] * rotation[0, 2]
+    y = points[..., 0] * rotation[1, 0] + points[..., 1] * rotation[1, 1] + points[..., 2] * rotation[1, 2]
+    z = points[..., 0] * rotation[2, 0] + points[..., 1] * rotation[2, 1] + points[..., 2] * rotation[2, 2]
+    return np.stack([x, y, z], axis=-1) + translation
+
+
+def rigid(transform, name="transform"):
+    """``(R, t)`` of the rigid transforms ``transform``, ``(..., 4, 4)``, or a
+    ValueError naming ``name``: not 4x4, not finite, a last row other than
+    ``[0, 0, 0, 1]``, a rotation not orthonormal within
+    :data:`RIGID_TOLERANCE`, or a determinant that is not +1 (a reflection)."""
+    m = as_float64(transform, name, "(4, 4)")
+    if m.shape == (4, 4):
+        one = _rigid_one(m)
+        if one is not None:
+            return one
+    if m.ndim < 2 or m.shape[-2:] != (4, 4):
+        raise ValueError(f"{name} must be a 4x4 matrix; got shape {m.shape}")
+    if not np.isfinite(m).all():
+        raise ValueError(f"{name} must be finite")
+    if not (m[..., 3, :] == (0.0, 0.0, 0.0, 1.0)).all():
+        raise ValueError(f"{name} must have the last row [0, 0, 0, 1]; got {m[..., 3, :].tolist()}")
+    r = m[..., :3, :3]
+    error = np.abs(np.swapaxes(r, -1, -2) @ r - np.eye(3)).max(axis=(-1, -2), initial=0.0)
+    if (error > RIGID_TOLERANCE).any():
+        raise ValueError(
+            f"{name} must be rigid: its rotation is orthonormal only to {float(np.max(error)):.3g} "
+            f"(at most {RIGID_TOLERANCE:g})"
+        )
+    if (np.linalg.det(r) < 0).any():
+        raise ValueError(f"{name} must be rigid, a rotation: its determinant is -1 (a reflection)")
+    return frozen(np.ascontiguousarray(r), new=True), frozen(np.ascontiguousarray(m[..., :3, 3]), new=True)
+
+
+def _rigid_one(m):
+    """``(R, t)`` of one 4x4 transform that is certainly rigid, by checks in Python floats
+    (faster than NumPy's on one matrix); None where a check fails or comes within half the
+    tolerance of failing, for :func:`rigid`'s checks and messages to decide."""
+    rows = m.tolist()
+    if rows[3] != [0.0, 0.0, 0.0, 1.0] or not all(map(math.isfinite, rows[0] + rows[1] + rows[2])):
+        return None
+    (a, b, c, x), (d, e, f, y), (g, h, i, z) = rows[0], rows[1], rows[2]
+    # max |R^T R - I|: the columns' dot products.
+    error = max(
+        abs(a * a + d * d + g * g - 1.0), abs(b * b + e * e + h * h - 1.0), abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h), abs(a * c + d * f + g * i), abs(b * c + e * f + h * i),
+    )  # fmt: skip
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    if not error <= 0.5 * RIGID_TOLERANCE or det < 0.5:
+        return None
+    r = np.array(rows[:3])[:, :3]
+    return frozen(np.ascontiguousarray(r), new=True), frozen(np.array([x, y, z]), new=True)
+
+
+class Posed(Frozen):
+    """A shape moved by a rigid transform, as a view that shares the shape's data.
+
+    Parameters
+    ----------
+    shape : Shape
+        Any 3D shape of the package, its batch included.
+    transform : array_like, shape ``(4, 4)``
+        ``[[R, t], [0, 0, 0, 1]]``: the shape's points ``X`` are at
+        ``R X + t``.  ``R`` orthonormal with determinant +1 (within
+        :data:`RIGID_TOLERANCE`).
+
+    Notes
+    -----
+    Made by every shape's ``transformed(T)``; posing a posed view composes
+    the transforms.  Answers are in world coordinates; see
+    :mod:`proximity.shapes.posed` for their accuracy.
+
+    Examples
+    --------
+    >>> import numpy as np, proximity
+    >>> tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> T = np.eye(4); T[:3, 3] = [0, 0, 5]          # moved up by 5
+    >>> r = tri.transformed(T).closest_point([0.25, 0.25, 7.0])
+    >>> float(r.distance), r.point.tolist()
+    (2.0, [0.25, 0.25, 5.0])
+    """
+
+    __slots__ = ("shape", "rotation", "translation", "batch_shape", "dim")
+    _public = ("__init__", "distance", "closest_point")
+
+    def __init__(self, shape: Shape, transform: Transform) -> None:
+        if not hasattr(shape, "closest_point") or not hasattr(shape, "batch_shape"):
+            raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
+        if shape.dim != 3:
+            raise ValueError(f"shape must be 3D to be transformed; got a {shape.dim}D {type(shape).__name__}")
+        r, t = rigid(transform)
+        if r.shape != (3, 3):
+            raise ValueError(f"transform must be one 4x4 matrix; got shape {r.shape[:-2] + (4, 4)}")
+        if isinstance(shape, Posed):
+            # X -> R (R' X + t') + t: the inner pose first.
+            r, t = frozen(r @ shape.rotation, new=True), frozen(r @ shape.translation + t, new=True)
+            shape = shape.shape
+        self._init(shape=shape, rotation=r, translation=t, batch_shape=shape.batch_shape, dim=3)
+
+    @classmethod
+    def _at(cls, shape, rotation, translation):
+        """A view of ``shape`` at a pose already validated (no checks)."""
+        view = object.__new__(cls)
+        view._init(
+            shape=shape, rotation=rotation, translation=translation, batch_shape=shape.batch_shape, dim=3
+        )
+        return view
+
+    @property
+    def methods(self) -> tuple[str, ...]:
+        """The values ``method`` accepts: the shape's."""
+        return self.shape.methods
+
+    @property
+    def result_type(self) -> type[Result]:
+        """The class of :meth:`closest_point`'s results: the shape's."""
+        return self.shape.result_type
+
+    @property
+    def transform(self) -> Floats:
+        """The 4x4 matrix of the pose."""
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = self.rotation, self.translation
+        return m
+
+    def __repr__(self):
+        return format_repr(self, ("rotation", "translation"), shape=self.shape)
+
+    def transformed(self, transform: Transform) -> Posed:
+        """The view moved by ``transform`` as well: the composed pose."""
+        return Posed(self, transform)
+
+    def inflated(self, radius: ArrayLike) -> Inflated:
+        """The points within ``radius`` of the posed shape (:class:`proximity.Inflated`)."""
+        from .rounded import Inflated
+
+        return Inflated(self, radius)
+
+    def _local(self, points):
+        """The points in the shape's frame: ``R^T (P - t)``, as ``(P - t) R``."""
+        p = as_float64(points, "points", "(..., 3)")
+        if p.ndim == 0 or p.shape[-1] != 3:
+            raise ValueError(f"points must have shape (..., 3); got shape {p.shape}")
+        return p, to_local(p, self.rotation, self.translation)
+
+    def distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Distances:
+        """Distance from each point to the posed shape; see :func:`proximity.distance`."""
+        if args:
+            raise keyword_only(self, "distance", args)
+        return self.shape.distance(self._local(points)[1], method=method, max_distance=max_distance)
+
+    def signed_distance(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+        **options: Any,
+    ) -> Distances:
+        """The shape's signed distance at the moved points (meshes, scenes and rounded shapes)."""
+        if args:
+            raise keyword_only(self, "signed_distance", args)
+        local = self._local(points)[1]
+        if max_distance is not None:
+            options["max_distance"] = max_distance
+        return self.shape.signed_distance(local, method=method, **options)
+
+    def contains(self, points: ArrayLike, *args: object, **options: Any) -> Bools:
+        """Whether each point is in the posed shape (meshes and rounded shapes)."""
+        if args:
+            raise keyword_only(self, "contains", args)
+        return self.shape.contains(self._local(points)[1], **options)
+
+    def closest_point(
+        self,
+        points: ArrayLike,
+        *args: object,
+        method: str = DEFAULT_METHOD,
+        max_distance: float | None = None,
+    ) -> Result:
+        """Closest point on the posed shape to each point, in world coordinates.
+
+        The result is the shape's, with ``point`` (and ``normal``) moved back
+        to the world; see :func:`proximity.closest_point`.
+        """
+        if args:
+            raise keyword_only(self, "closest_point", args)
+        p, local = self._local(points)
+        core = self.shape.closest_point(local, method=method, max_distance=max_distance)
+        fields = asdict(core)
+        fields["point"] = to_world(np.asarray(core.point), self.rotation, self.translation)
+        result = type(core)(**fields)
+        if "_normal" in core.__dict__:
+            result.__dict__["_normal"] = freeze_result(np.asarray(core.normal) @ self.rotation.T)
+        else:
+            members = core.__dict__.get("_query", (None, None, None))[1]
+            attach(result, p, members, self)
+        return result
+
+    def _surface_normals(self, result, rows, members):
+        """The shape's normals at rows ``rows`` (on it), rotated to the world."""
+        points = np.broadcast_to(np.asarray(result.__dict__["_query"][0]), np.shape(result.point))
+        local = (points.reshape(-1, 3)[rows] - self.translation) @ self.rotation
+        shape = self.shape if members is None else self.shape[members]
+        normal = np.asarray(shape.closest_point(local).normal).reshape(-1, 3)
+        return normal @ self.rotation.T
+
+    def _rows(self):
+        """The shape's rows, moved to the world (see :func:`proximity.primitives.transform_rows`)."""
+        from ..primitives import transform_rows
+
+        rows = self.shape._rows()
+        kinds, params = rows[:2]
+        return (kinds, transform_rows(kinds, params, self.rotation, self.translation), *rows[2:])
