@@ -62,7 +62,7 @@ import numpy as np
 
 import proximity
 from benchmarks.meshes import write_section
-from proximity.shapes.posed import to_world
+from proximity.numerics.rigid import to_world
 from proximity.testing.meshes import icosphere, peer_mesh, reference
 
 INSTANCES = 50

@@ -55,7 +55,7 @@ call per pose, whose answer is the one checked.
 
 **Accuracy** against the exact minimum over all pairs of faces of the
 torus posed in float64 (``torus.transformed(T)``'s vertices ``R V + t``
-as :func:`proximity.shapes.posed.to_world` rounds them): a face of one mesh can
+as :func:`proximity.numerics.rigid.to_world` rounds them): a face of one mesh can
 hold a pair within ``D`` only where its centroid's distance to the other
 mesh, less its circumradius, is at most ``D`` (``D`` an upper bound of the
 minimum, with a margin far beyond the point queries' error); the pairs of
@@ -107,7 +107,7 @@ import numpy as np
 import proximity
 from adapters.pybullet_backend import load as load_pybullet
 from benchmarks.moving import _installed, random_rotations
-from proximity.shapes.posed import to_world
+from proximity.numerics.rigid import to_world
 from proximity.testing import exact
 from proximity.testing.exact import PREC
 from proximity.testing.meshes import icosphere, torus

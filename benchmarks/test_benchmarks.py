@@ -141,7 +141,7 @@ def test_the_pairs_reference_is_the_exact_minimum_over_every_face_pair():
     import numpy as np
 
     from benchmarks import pairs
-    from proximity.shapes.posed import to_world
+    from proximity.numerics.rigid import to_world
     from proximity.testing import exact
     from proximity.testing.meshes import icosphere, torus
 

@@ -601,6 +601,17 @@ def _new_pair(values):
     return result
 
 
+def pair_result(values, out_shape):
+    """The :class:`PairResult` of flat fields ``values`` (a row per pair), shaped ``out_shape``."""
+    fields = {}
+    for name, value in values.items():
+        value = np.asarray(value).reshape(out_shape + np.shape(value)[1:])
+        fields[name] = value[()] if value.ndim == 0 else freeze_result(np.array(value))
+        if name.startswith("feature") and value.ndim == 0:
+            fields[name] = np.int8(value)
+    return _new_pair(fields)
+
+
 def beyond(answer, limit):
     """``answer`` (a result, or an array of distances) with the rows farther
     than ``limit`` set as a cutoff sets them: distance and squared distance

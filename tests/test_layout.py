@@ -20,7 +20,8 @@ def _modules():
 
 
 def _imports(name, path, deep=False, modules=()):
-    """The modules ``name`` imports when it is imported (module level), or anywhere (``deep``).
+    """The modules ``name`` imports when it is imported (module level), or anywhere (``deep``),
+    modules loaded by name at a first use (:func:`proximity.runtime.lazy.load`) included.
 
     ``from package import name`` depends on the module ``package.name``
     where there is one (of ``modules``), else on ``package`` itself.
@@ -38,7 +39,24 @@ def _imports(name, path, deep=False, modules=()):
                 base = ".".join(anchor + ([node.module] if node.module else []))
             for alias in node.names:
                 found.add(f"{base}.{alias.name}" if f"{base}.{alias.name}" in modules else base)
+        elif deep and isinstance(node, ast.Call) and _loads_by_name(node):
+            found.add(node.args[0].value)
     return found
+
+
+def _loads_by_name(call):
+    """Whether ``call`` imports a module named by a string: ``lazy.load("proximity.x")``,
+    ``importlib.import_module("proximity.x")``."""
+    func = call.func
+    named = isinstance(func, ast.Attribute) and func.attr in ("load", "import_module")
+    return (
+        named
+        and isinstance(func.value, ast.Name)
+        and func.value.id in ("lazy", "_lazy", "importlib")
+        and len(call.args) == 1
+        and isinstance(call.args[0], ast.Constant)
+        and str(call.args[0].value).startswith("proximity.")
+    )
 
 
 def test_no_module_is_longer_than_the_limit():
@@ -66,6 +84,116 @@ def test_no_import_circles():
     for name in graph:
         if name not in state:
             visit(name, [name])
+
+
+#: The package's parts from the bottom up: each may import only the parts before it, and itself.
+#: A part is a folder, or a module at the root (``""``: the package's ``__init__.py``).
+ORDER = (
+    ("features", "methods", "_typing", "_validate", "results"),  # the vocabulary
+    ("runtime",),
+    ("primitives",),  # the registry of kinds of primitive
+    ("numerics",),
+    ("point",),
+    ("broadphase",),
+    ("signs",),
+    ("shapes",),
+    ("pair",),
+    ("interop",),
+    ("", "compile", "cloud", "dask", "trimesh_compat", "testing", "adapters"),  # the public face
+)
+
+#: The most modules at the package's root, and the fewest folders of one job each.
+MAX_ROOT_MODULES = 12
+MIN_FOLDERS = 6
+
+
+def _part(module):
+    """The part of :data:`ORDER` that the package's module ``module`` (``proximity.x.y``) is in."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _rank(part):
+    for rank, level in enumerate(ORDER):
+        if part in level:
+            return rank
+    raise AssertionError(f"{part!r} is in no level of ORDER: add it")
+
+
+def _graph(deep):
+    """``{module: modules of the package it imports}``, with the imports inside functions (``deep``)."""
+    modules = dict(_modules())
+    modules.update(_adapter_modules())
+    return {
+        name: sorted(_imports(name, path, deep=deep, modules=modules) & modules.keys() - {name})
+        for name, path in modules.items()
+    }
+
+
+def _adapter_modules():
+    # In a clone, adapters/ is installed as proximity.adapters; in an install it is in PACKAGE already.
+    folder = PACKAGE.parent / "adapters"
+    if (PACKAGE / "adapters").is_dir() or not (folder / "__init__.py").is_file():
+        return {}
+    return {
+        ("proximity.adapters" if p.stem == "__init__" else f"proximity.adapters.{p.stem}"): p
+        for p in sorted(folder.glob("*.py"))
+    }
+
+
+def _circle(graph):
+    """A circle of ``graph`` as a list of nodes, or None."""
+    state = {}
+
+    def visit(node, stack):
+        state[node] = "open"
+        for nxt in graph.get(node, ()):
+            if state.get(nxt) == "open":
+                return stack[stack.index(nxt) :] + [nxt]
+            if nxt not in state:
+                found = visit(nxt, stack + [nxt])
+                if found:
+                    return found
+        state[node] = "done"
+        return None
+
+    for name in sorted(graph):
+        if name not in state:
+            found = visit(name, [name])
+            if found:
+                return found
+    return None
+
+
+def test_no_import_circles_counting_imports_inside_functions():
+    # A deferred import that dodges a circle is still a circle.
+    circle = _circle(_graph(deep=True))
+    assert circle is None, "import circle: " + " -> ".join(circle)
+
+
+def test_no_part_imports_a_part_above_it():
+    upward = []
+    for name, imported in _graph(deep=True).items():
+        for other in imported:
+            if _rank(_part(other)) > _rank(_part(name)):
+                upward.append(f"{name} -> {other}")
+    assert not upward, "imports of a part above (see ORDER):\n" + "\n".join(upward)
+
+
+def test_the_folders_have_one_job_each_and_the_root_is_small():
+    root = [p.name for p in PACKAGE.glob("*.py")]
+    assert len(root) <= MAX_ROOT_MODULES, sorted(root)
+    folders = [p for p in PACKAGE.iterdir() if (p / "__init__.py").is_file() and p.name != "testing"]
+    assert len(folders) >= MIN_FOLDERS, folders
+    for folder in folders:
+        doc = ast.get_docstring(ast.parse((folder / "__init__.py").read_text()))
+        # Each says what lives there and what it may import.
+        assert doc and "import" in doc, f"{folder.name}/__init__.py does not say what it may import"
+    every = {part for level in ORDER for part in level}
+    for p in list(PACKAGE.iterdir()):
+        name = p.stem if p.suffix == ".py" else p.name
+        if (p.suffix == ".py" or (p / "__init__.py").is_file()) and name != "__init__":
+            assert name in every, f"{p.name} is in no level of ORDER"
 
 
 def test_no_test_imports_the_benchmarks():

@@ -8,8 +8,8 @@ import pytest
 import proximity
 from proximity import broadphase
 from proximity.broadphase.refit import REFIT_SUBTREE
+from proximity.numerics.rigid import to_local
 from proximity.results import asdict
-from proximity.shapes.posed import to_local
 from proximity.testing import exact, examples
 from proximity.testing.meshes import icosphere, near_points, soup, torus
 
@@ -109,7 +109,7 @@ def test_bad_transforms_name_the_argument(T, match):
 
 
 def test_rigid_accepts_rotations_within_the_tolerance_and_names_the_rest():
-    from proximity.shapes.posed import RIGID_TOLERANCE, rigid
+    from proximity.numerics.rigid import RIGID_TOLERANCE, rigid
 
     turn = np.eye(4)
     turn[:3, :3], turn[:3, 3] = _pose(3)[:3, :3], [1.0, -2.0, 3.0]

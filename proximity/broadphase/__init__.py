@@ -25,6 +25,12 @@ for its rows.  One module per job:
     The compiled search of one block of points.
 :mod:`.nearest`
     The search of a batch, and the certified rows finished exactly.
+:mod:`.instances`
+    Many posed copies of a few collections, searched without a tree of their primitives.
+
+It may import :mod:`proximity.numerics`, :mod:`proximity.runtime`, the registry of primitives
+(whose kernel modules it reaches through their records) and the root's vocabulary; the
+descent of two hierarchies at once is a pair query's (:mod:`proximity.pair.descent`).
 """
 
 from .bounds import FACE_COLUMNS

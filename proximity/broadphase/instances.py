@@ -12,11 +12,11 @@ the farthest of a mesh's vertices or of the corners of its leaves' boxes:
 unlike the box, it does not grow when the instance turns).
 It then visits the instances nearest first by that bound, moves the point
 into each one's frame (``R^T (P - t)``, summed as
-:func:`proximity.shapes.posed.to_local` sums it) and runs the prototype's search
+:func:`proximity.numerics.rigid.to_local` sums it) and runs the prototype's search
 there (:func:`.traverse._descend`), with the best answer so far as its
 cutoff, until the nearest bound left exceeds the best answer.  Distances
 are the same in every frame (the poses are rigid, within
-:data:`proximity.shapes.posed.RIGID_TOLERANCE`), so the best over the instances is
+:data:`proximity.numerics.rigid.RIGID_TOLERANCE`), so the best over the instances is
 the answer; ties go to the lowest index, the instances numbering their
 primitives one after the other.
 
@@ -228,7 +228,7 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                 prim[i] = -1
             continue
         dist[i] = best
-        # The winner's closest point, back in the world (summed as posed.to_world).
+        # The winner's closest point, back in the world (summed as rigid.to_world).
         r = inst.rotation[winner]
         t = inst.translation[winner]
         near_x = w_x * r[0, 0] + w_y * r[0, 1] + w_z * r[0, 2] + t[0]
@@ -418,7 +418,7 @@ def instance_arrays(trees, prototype, rotation, translation, offset, loose=False
 
 def _moved(corners, rotation, translation):
     """Corners ``(n, 8, 3)``, those of instance ``i`` moved by its pose (summed as
-    :func:`proximity.shapes.posed.to_world` sums)."""
+    :func:`proximity.numerics.rigid.to_world` sums)."""
     out = np.empty_like(corners)
     for a in range(3):
         out[..., a] = (
@@ -474,7 +474,7 @@ def _resolve(trees, instances, rows, points, out, full, loose, cutoff):
     """Rows whose nearest primitive may be an undecided certified answer:
     each instance near enough resolves its candidates in its own frame
     (:func:`.nearest._resolve` on a copy of the row), the least wins."""
-    from ..shapes.posed import to_local, to_world
+    from ..numerics.rigid import to_local, to_world
     from .nearest import _resolve as resolve_tree
 
     for i in rows:

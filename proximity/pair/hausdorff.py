@@ -74,8 +74,9 @@ import warnings
 import numpy as np
 
 from ..methods import resolve
+from ..numerics.rigid import to_local, to_world
 from ..results import HausdorffResult
-from ..shapes.posed import Posed, to_local, to_world
+from ..shapes.posed import Posed
 
 __all__ = ["MAX_DEPTH", "hausdorff_distance"]
 

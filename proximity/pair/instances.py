@@ -20,6 +20,7 @@ search.  Each row of the answer is one part's answer, bit for bit, its
 import numpy as np
 
 from .._validate import freeze_result
+from ..results import pair_result
 from ..shapes.posed import Posed
 from ..shapes.rounded import Inflated
 
@@ -46,11 +47,11 @@ def unwrapped(shape):
             radius, core = float(core.radius), core.core
     if type(core) is not Scene or core._instanced is None:
         return None
-    from .queries import _pose_of
+    from ..numerics.rigid import pose_matrix
 
     transform = None
     for view in reversed(poses):
-        pose = _pose_of(view.rotation, view.translation)
+        pose = pose_matrix(view.rotation, view.translation)
         transform = pose if transform is None else pose @ transform
     return core, transform, radius
 
@@ -138,10 +139,8 @@ def _merged(best, got, key):
 
 
 def _with(result, fields):
-    from .queries import _result
-
     values = {name: np.asarray(getattr(result, name)) for name in _FIELDS}
     values.update(fields)
     shape = np.shape(values["distance"])
     flat = {name: np.asarray(v).reshape((-1,) + np.shape(v)[len(shape) :]) for name, v in values.items()}
-    return _result(flat, shape)
+    return pair_result(flat, shape)

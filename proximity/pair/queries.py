@@ -32,8 +32,9 @@ from .. import primitives
 from .._validate import broadcast_batch, freeze_result
 from ..features import _FEATURES, NONE, VERTEX0
 from ..methods import resolve
+from ..numerics.rigid import pose_matrix
 from ..numerics.rounding import surface_points
-from ..results import PairResult, _new_pair
+from ..results import PairResult, pair_result
 from ..runtime import lazy, threads
 from . import table
 
@@ -83,8 +84,9 @@ def _unposed(shape, name):
 
     Rounding and posing commute (a rigid motion keeps distances), so a posed rounded
     shape and a rounded posed one are both the rounded shape, posed."""
+    from ..numerics.rigid import to_world
     from ..shapes.base import Point, Segment, Triangle
-    from ..shapes.posed import Posed, to_world
+    from ..shapes.posed import Posed
     from ..shapes.rounded import Inflated
     from ..shapes.scene import Scene
 
@@ -120,12 +122,6 @@ def _unposed(shape, name):
     return (core if radius is None else Inflated(core, radius)), rotation, translation
 
 
-def _pose_of(rotation, translation):
-    pose = np.eye(4)
-    pose[:3, :3], pose[:3, 3] = rotation, translation
-    return pose
-
-
 def _poses(a, b, pose_b, names=("a", "b")):
     """The pair without its posed views: ``(a, b, pose_b, swap, back)``.  ``swap``: the sides
     were exchanged (a posed side a becomes side b); ``back``: ``(R, t)`` that moves the
@@ -137,11 +133,11 @@ def _poses(a, b, pose_b, names=("a", "b")):
     if ra is None and rb is None:
         return a, b, None, False, None
     if ra is None:
-        return a, b, _pose_of(rb, tb), False, None
+        return a, b, pose_matrix(rb, tb), False, None
     if rb is None:
-        return b, a, _pose_of(ra, ta), True, None
+        return b, a, pose_matrix(ra, ta), True, None
     # Both posed: b in a's frame, R_a^T (R_b x + t_b - t_a).
-    return a, b, _pose_of(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
+    return a, b, pose_matrix(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
 
 
 def _check_max_distance(max_distance):
@@ -568,7 +564,7 @@ def _mesh_pair(a, b, method):
         return None
     pose = None
     if type(b) is Posed:
-        pose, b = _pose_of(b.rotation, b.translation)[:3], b.shape  # as _poses and _pose_array give it
+        pose, b = pose_matrix(b.rotation, b.translation)[:3], b.shape  # as _poses and _pose_array give it
     if type(b) is not TriangleMesh:
         return None
     global _last
@@ -654,26 +650,16 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
                 value = np.where(found, value, -1)
             values[f"{name}_{key}"] = value
     if back is not None:
-        from ..shapes.posed import to_world
+        from ..numerics.rigid import to_world
 
         for key in ("point_a", "point_b"):
             values[key] = to_world(values[key], *back)
-    result = _result(values, out_shape)
+    result = pair_result(values, out_shape)
     return result.swapped() if swap else result
 
 
 def _rounded_rows(out):
     return "sides" in out and any(t.params.shape[1] > primitives.N_PARAMS for t in out["sides"])
-
-
-def _result(values, out_shape):
-    fields = {}
-    for name, value in values.items():
-        value = np.asarray(value).reshape(out_shape + np.shape(value)[1:])
-        fields[name] = value[()] if value.ndim == 0 else freeze_result(np.array(value))
-        if name.startswith("feature") and value.ndim == 0:
-            fields[name] = np.int8(value)
-    return _new_pair(fields)
 
 
 def distance(a, b, *, method="robust", max_distance=None, pose_b=None):

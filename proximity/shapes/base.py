@@ -9,7 +9,7 @@ pay for loading the compiler.
 from __future__ import annotations
 
 import types
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -43,11 +43,13 @@ from ..results import (
 )
 from ..runtime import counts, lazy, pool, threads
 
-if TYPE_CHECKING:
-    from .posed import Posed
-    from .rounded import Inflated
-
 DEFAULT_METHOD = DEFAULT
+
+#: The views every shape makes of itself, by name: ``"posed"`` (:class:`.posed.Posed`, made by
+#: :meth:`Frozen.transformed`) and ``"rounded"`` (:class:`.rounded.Inflated`, made by
+#: ``inflated``).  Their modules build on this one and enter their classes here when they are
+#: imported (``proximity.shapes`` imports both), so that this module need not import them.
+VIEWS = {}
 _FLOAT64 = np.dtype(np.float64)
 _POINT = (3,)
 _REAL = frozenset("iuf")
@@ -139,7 +141,7 @@ class Frozen:
             copy.__module__ = cls.__module__
             setattr(cls, name, copy)
 
-    def transformed(self, transform: Transform) -> Posed:
+    def transformed(self, transform: Transform) -> Shape:
         """The shape moved by the rigid ``transform`` (4x4), as a view that
         shares its data: :class:`proximity.Posed`, in O(1).
 
@@ -150,9 +152,7 @@ class Frozen:
         >>> float(proximity.Sphere([0, 0, 0], 1.0).transformed(T).distance([13, 0, 0]))
         2.0
         """
-        from .posed import Posed
-
-        return Posed(self, transform)
+        return VIEWS["posed"](self, transform)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable")
@@ -226,7 +226,7 @@ class _Facade(Frozen):
             args.append(np.broadcast_to(array, self.batch_shape + array.shape[array.ndim - core :])[index])
         return type(self)(*args)
 
-    def inflated(self, radius: float) -> Inflated:
+    def inflated(self, radius: float) -> Shape:
         """The points within ``radius`` of the shape: a rounded solid
         (:class:`proximity.Inflated`), ``radius`` broadcasting with the batch.
 
@@ -238,9 +238,7 @@ class _Facade(Frozen):
         >>> slab.distance([[0.2, 0.2, 1.0], [0.2, 0.2, 0.1]]).tolist()
         [0.75, 0.0]
         """
-        from .rounded import Inflated
-
-        return Inflated(self, radius)
+        return VIEWS["rounded"](self, radius)
 
     def _prepare(self, points, method):
         method = check_method(method, self.methods)

@@ -22,15 +22,15 @@ vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._typing import ArrayLike, Bools, Distances, Floats, Transform
 from .._validate import as_float64, freeze_result, frozen
+from ..numerics.rigid import RIGID_TOLERANCE, rigid, to_local, to_world
 from ..results import asdict, attach, format_repr
-from .base import DEFAULT_METHOD, Frozen, keyword_only
+from .base import DEFAULT_METHOD, VIEWS, Frozen, keyword_only
 
 if TYPE_CHECKING:
     from ..results import Result
@@ -38,75 +38,6 @@ if TYPE_CHECKING:
     from .rounded import Inflated
 
 __all__ = ["RIGID_TOLERANCE", "Posed", "rigid"]
-
-#: The largest ``max |R^T R - I|`` of a transform accepted as rigid.
-RIGID_TOLERANCE = 1e-9
-
-
-def to_local(points, rotation, translation):
-    """``R^T (P - t)`` of ``(..., 3)`` points, summed in a fixed order (as the
-    instanced search computes it, so that both give the same bits)."""
-    d = points - translation
-    x = d[..., 0] * rotation[0, 0] + d[..., 1] * rotation[1, 0] + d[..., 2] * rotation[2, 0]
-    y = d[..., 0] * rotation[0, 1] + d[..., 1] * rotation[1, 1] + d[..., 2] * rotation[2, 1]
-    z = d[..., 0] * rotation[0, 2] + d[..., 1] * rotation[1, 2] + d[..., 2] * rotation[2, 2]
-    return np.stack([x, y, z], axis=-1)
-
-
-def to_world(points, rotation, translation):
-    """``R X + t`` of ``(..., 3)`` points, summed in a fixed order."""
-    x = points[..., 0] * rotation[0, 0] + points[..., 1] * rotation[0, 1] + points[..., 2] * rotation[0, 2]
-    y = points[..., 0] * rotation[1, 0] + points[..., 1] * rotation[1, 1] + points[..., 2] * rotation[1, 2]
-    z = points[..., 0] * rotation[2, 0] + points[..., 1] * rotation[2, 1] + points[..., 2] * rotation[2, 2]
-    return np.stack([x, y, z], axis=-1) + translation
-
-
-def rigid(transform, name="transform"):
-    """``(R, t)`` of the rigid transforms ``transform``, ``(..., 4, 4)``, or a
-    ValueError naming ``name``: not 4x4, not finite, a last row other than
-    ``[0, 0, 0, 1]``, a rotation not orthonormal within
-    :data:`RIGID_TOLERANCE`, or a determinant that is not +1 (a reflection)."""
-    m = as_float64(transform, name, "(4, 4)")
-    if m.shape == (4, 4):
-        one = _rigid_one(m)
-        if one is not None:
-            return one
-    if m.ndim < 2 or m.shape[-2:] != (4, 4):
-        raise ValueError(f"{name} must be a 4x4 matrix; got shape {m.shape}")
-    if not np.isfinite(m).all():
-        raise ValueError(f"{name} must be finite")
-    if not (m[..., 3, :] == (0.0, 0.0, 0.0, 1.0)).all():
-        raise ValueError(f"{name} must have the last row [0, 0, 0, 1]; got {m[..., 3, :].tolist()}")
-    r = m[..., :3, :3]
-    error = np.abs(np.swapaxes(r, -1, -2) @ r - np.eye(3)).max(axis=(-1, -2), initial=0.0)
-    if (error > RIGID_TOLERANCE).any():
-        raise ValueError(
-            f"{name} must be rigid: its rotation is orthonormal only to {float(np.max(error)):.3g} "
-            f"(at most {RIGID_TOLERANCE:g})"
-        )
-    if (np.linalg.det(r) < 0).any():
-        raise ValueError(f"{name} must be rigid, a rotation: its determinant is -1 (a reflection)")
-    return frozen(np.ascontiguousarray(r), new=True), frozen(np.ascontiguousarray(m[..., :3, 3]), new=True)
-
-
-def _rigid_one(m):
-    """``(R, t)`` of one 4x4 transform that is certainly rigid, by checks in Python floats
-    (faster than NumPy's on one matrix); None where a check fails or comes within half the
-    tolerance of failing, for :func:`rigid`'s checks and messages to decide."""
-    rows = m.tolist()
-    if rows[3] != [0.0, 0.0, 0.0, 1.0] or not all(map(math.isfinite, rows[0] + rows[1] + rows[2])):
-        return None
-    (a, b, c, x), (d, e, f, y), (g, h, i, z) = rows[0], rows[1], rows[2]
-    # max |R^T R - I|: the columns' dot products.
-    error = max(
-        abs(a * a + d * d + g * g - 1.0), abs(b * b + e * e + h * h - 1.0), abs(c * c + f * f + i * i - 1.0),
-        abs(a * b + d * e + g * h), abs(a * c + d * f + g * i), abs(b * c + e * f + h * i),
-    )  # fmt: skip
-    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-    if not error <= 0.5 * RIGID_TOLERANCE or det < 0.5:
-        return None
-    r = np.array(rows[:3])[:, :3]
-    return frozen(np.ascontiguousarray(r), new=True), frozen(np.array([x, y, z]), new=True)
 
 
 class Posed(Frozen):
@@ -189,9 +120,7 @@ class Posed(Frozen):
 
     def inflated(self, radius: ArrayLike) -> Inflated:
         """The points within ``radius`` of the posed shape (:class:`proximity.Inflated`)."""
-        from .rounded import Inflated
-
-        return Inflated(self, radius)
+        return VIEWS["rounded"](self, radius)
 
     def _local(self, points):
         """The points in the shape's frame: ``R^T (P - t)``, as ``(P - t) R``."""
@@ -275,3 +204,6 @@ class Posed(Frozen):
         rows = self.shape._rows()
         kinds, params = rows[:2]
         return (kinds, transform_rows(kinds, params, self.rotation, self.translation), *rows[2:])
+
+
+VIEWS["posed"] = Posed

@@ -42,7 +42,7 @@ from .._typing import ArrayLike, Bools, Distances, Floats
 from .._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
 from ..numerics.rounding import certify_difference, outward, spindle_points, surface_points
 from ..results import asdict, beyond, format_repr
-from .base import DEFAULT_METHOD, Circle, Frozen, check_method, keyword_only
+from .base import DEFAULT_METHOD, VIEWS, Circle, Frozen, Point, Segment, check_method, keyword_only
 
 if TYPE_CHECKING:
     from ..results import Result
@@ -250,6 +250,9 @@ class Inflated(Frozen):
         return result
 
 
+VIEWS["rounded"] = Inflated
+
+
 class Sphere(Inflated):
     """A batch of balls: the points within ``radius`` of ``center``.
 
@@ -268,8 +271,6 @@ class Sphere(Inflated):
     __slots__ = ()
 
     def __init__(self, center: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
-        from .base import Point
-
         super().__init__(Point(center, copy=copy), radius, copy=copy)
 
     @property
@@ -297,8 +298,6 @@ class Capsule(Inflated):
     __slots__ = ()
 
     def __init__(self, vertices: ArrayLike, radius: ArrayLike, *, copy: bool = False) -> None:
-        from .base import Segment
-
         super().__init__(Segment(vertices, copy=copy), radius, copy=copy)
 
     @property

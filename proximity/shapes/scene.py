@@ -168,7 +168,8 @@ class Scene(Collection):
         >>> scene.with_poses(T).distance([[12, 0, 0]]).tolist()
         [1.0]
         """
-        from .posed import Posed, rigid
+        from ..numerics.rigid import rigid
+        from .posed import Posed
 
         if self._instanced is None:
             raise ValueError(
