@@ -30,7 +30,7 @@ class Method:
         exact rational arithmetic (after the compiled loop).
     loose : bool
         Whether its closest point on a circle may leave the circle's
-        bounding box (the seed's rim direction near the axis), which the
+        bounding box (Eberly's rim direction near the axis), which the
         broad phase must then allow for.
 
     Examples
@@ -61,7 +61,7 @@ CERTIFIED = Method(
 )
 EBERLY = Method(
     "eberly",
-    "none: the seed documents' algorithms as written, kept as the baseline",
+    "none: Eberly's algorithms as written in his two documents, kept as the baseline",
     loose=True,
 )
 

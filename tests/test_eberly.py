@@ -1,4 +1,4 @@
-"""The seed's method: faithful to the listings, and failing where documented."""
+"""Eberly's algorithm as written in his document: faithful to the listings, and failing where documented."""
 
 import numpy as np
 import pytest

@@ -228,6 +228,6 @@ def test_bad_input_names_the_argument(build, error, match):
         build()
 
 
-def test_segments_have_no_seed_method():
+def test_segments_have_no_eberly_method():
     with pytest.raises(ValueError, match=r"method must be one of \('robust', 'certified'\); got 'eberly'"):
         proximity.Segment([[0, 0, 0], [1, 0, 0]]).distance([0, 1, 0], method="eberly")

@@ -169,7 +169,7 @@ def test_eberly_fails_where_the_study_says(kind, family):
     ("kind", "name"), [("triangle", "offset"), ("disk", "disk_offset"), ("circle", "disk_offset")]
 )
 def test_eberly_error_grows_with_the_offset(kind, name):
-    """Away from the origin the seed forms differences of absolute coordinates:
+    """Away from the origin Eberly's algorithm forms differences of absolute coordinates:
     its error grows in proportion to the offset, while robust's does not."""
     registry = scenes.TRIANGLE_FAMILIES if kind == "triangle" else scenes.DISK_FAMILIES
     sweep = [f for f in registry if f.name == name]

@@ -14,10 +14,10 @@ from tests.checks import BOUND, check_triangle
 
 F = Feature
 EPS = 2.0**-52
-# With B = V0, E0 = V1 - V0 and E1 = V2 - V0 the seed's (s, t) are (x, y).
+# With B = V0, E0 = V1 - V0 and E1 = V2 - V0 Eberly's (s, t) are (x, y).
 UNIT = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
-# One known case per region of the seed's Figure 1: (point, feature, closest, squared distance).
+# One known case per region of Figure 1 of Eberly's document: (point, feature, closest, squared distance).
 REGIONS = {
     0: ([0.25, 0.25, 1.0], F.FACE, [0.25, 0.25, 0.0], 1.0),
     1: ([1.0, 1.0, 0.0], F.EDGE12, [0.5, 0.5, 0.0], 0.5),

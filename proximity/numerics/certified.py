@@ -56,7 +56,7 @@ from ..runtime.loops import (
     store,
     triangle_at,
 )
-from . import dd as dd
+from . import dd
 from .fp import SAFE_MAX, SAFE_MIN, cross_accurate, dot3_accurate, edge_function, fma, pow2_scale
 
 U = 2.0**-53

@@ -5,7 +5,7 @@ within rounding of a region boundary or on the shape, degenerate triangles),
 so its speed matters little.  Every float is taken at its exact binary value
 (``Fraction(float)`` is exact).
 
-Triangles run the seed's region algorithm (Listings 1-8) exactly, which is
+Triangles run the region algorithm of Eberly's document (Listings 1-8) exactly, which is
 correct in rational arithmetic for every non-degenerate triangle; a
 zero-area triangle is the segment hull of its edges.  Segments are the
 clamped projection, exact.  Square roots are taken
@@ -92,7 +92,7 @@ def _on_open_segment(x, a, b):
     return 0 < t < 1 and all(a[i] + t * e[i] == x[i] for i in range(len(x)))
 
 
-def _seed_region(d, a, b, c, e):
+def _eberly_region(d, a, b, c, e):
     """Listings 1-8 in exact arithmetic, for ``det = ac - b^2 > 0``; ``(s, t)``."""
     det = a * c - b * b
     s = b * e - c * d
@@ -139,7 +139,7 @@ def _triangle(v, p):
     dvec = _sub(v[0], p)
     d, e = _dot(e0, dvec), _dot(e1, dvec)
     if a * c - b * b > 0:
-        s, t = _seed_region(d, a, b, c, e)
+        s, t = _eberly_region(d, a, b, c, e)
         closest = [v[0][i] + s * e0[i] + t * e1[i] for i in range(3)]
     else:
         # Zero area: the triangle is the hull of its edges, a segment or a point.

@@ -178,8 +178,8 @@ def circle(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
-    """The seed's ``N`` (normalised as given) and ``Q - C``, as written."""
+def eberly_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
+    """Eberly's ``N`` (normalised as given) and ``Q - C``, as written in his document."""
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = nx / length, ny / length, nz / length
     h = nx * (px - cx) + ny * (py - cy) + nz * (pz - cz)
@@ -188,9 +188,9 @@ def seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz):
 
 
 @inline
-def seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
+def eberly_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
     """Section 1 as written; same return as :func:`circle`."""
-    nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
+    nx, ny, nz, h, qx, qy, qz, q = eberly_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
     on_axis = q == 0.0
     dx, dy, dz = px - cx, py - cy, pz - cz
     x = cx + radius * qx / q

@@ -21,8 +21,7 @@ from numba import prange
 from .. import methods
 from ..features import Feature
 from ..methods import CERTIFIED
-from ..numerics import certified
-from ..numerics import dd as dd
+from ..numerics import certified, dd
 from ..numerics import exact as _exact
 from ..numerics.fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, pow2_scale, unscale
 from ..primitives import CIRCLE, DISK
@@ -49,10 +48,10 @@ from .circle import (
     circle,
     decompose,
     decompose_local,
+    eberly_circle,
+    eberly_projection,
     rim,
     rim_direction,
-    seed_circle,
-    seed_projection,
     short_radial,
     window,
 )
@@ -94,14 +93,14 @@ def disk(cx, cy, cz, ux, uy, uz, radius, px, py, pz):
 
 
 @inline
-def seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
+def eberly_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz):
     """Section 2 as written; same return as :func:`disk`."""
-    nx, ny, nz, h, qx, qy, qz, q = seed_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
+    nx, ny, nz, h, qx, qy, qz, q = eberly_projection(cx, cy, cz, nx, ny, nz, px, py, pz)
     if q <= radius:
         x, y, z = cx + qx, cy + qy, cz + qz
         sqr = (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
         return math.sqrt(sqr), sqr, x, y, z, FACE, False, h, q
-    d, sqr, x, y, z, _, h, q = seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+    d, sqr, x, y, z, _, h, q = eberly_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
     return d, sqr, x, y, z, RIM, False, h, q
 
 
@@ -129,13 +128,13 @@ def robust_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz
 
 @inline
 def eberly_query(is_disk, cx, cy, cz, ux, uy, uz, nx, ny, nz, radius, px, py, pz):
-    """The seed's formula, as :func:`robust_query`."""
+    """Eberly's formula as written in his document, as :func:`robust_query`."""
     if not _finite(px, py, pz):
         return _NAN_ROW
     if is_disk:
-        d, sqr, x, y, z, f, e, h, q = seed_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+        d, sqr, x, y, z, f, e, h, q = eberly_disk(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
         return certified.CERTAIN, d, sqr, x, y, z, f, e, h, q
-    d, sqr, x, y, z, e, h, q = seed_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
+    d, sqr, x, y, z, e, h, q = eberly_circle(cx, cy, cz, nx, ny, nz, radius, px, py, pz)
     return certified.CERTAIN, d, sqr, x, y, z, RIM, e, h, q
 
 

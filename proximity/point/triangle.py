@@ -121,7 +121,7 @@ F_EDGE01, F_EDGE12, F_EDGE20 = float(EDGE01), float(EDGE12), float(EDGE20)
 
 @kernel()
 def eberly(bx, by, bz, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz):
-    """Listings 1-8 of the seed, for ``T(s, t) = B + s E0 + t E1``.
+    """Listings 1-8 of Eberly's document, for ``T(s, t) = B + s E0 + t E1``.
 
     Returns ``(s, t, feature)``; the caller forms the closest point.
     """
@@ -491,7 +491,7 @@ def robust(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
 
 @inline
 def _eberly_query(v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z, px, py, pz):
-    """The seed's method with the closest point and distance formed as in its source."""
+    """Eberly's algorithm with the closest point and distance formed as in his document."""
     e0x, e0y, e0z = v1x - v0x, v1y - v0y, v1z - v0z
     e1x, e1y, e1z = v2x - v0x, v2y - v0y, v2z - v0z
     s, t, feature = eberly_select(v0x, v0y, v0z, e0x, e0y, e0z, e1x, e1y, e1z, px, py, pz)
@@ -594,7 +594,7 @@ def _robust_block(shape, P, n_j, k0, nb, out, exact, full):
     scatter_triangles(z, PAIR_OUT, k0, nb, out, full)
 
 
-# The seed's method on pairs keeps the coefficients, then the choice of
+# Eberly's algorithm on pairs keeps the coefficients, then the choice of
 # ``s, t`` and the feature, in the output rows until the results replace them.
 _TERMS = PAIR_OUT
 _CHOICE = PAIR_OUT + 5
@@ -602,7 +602,7 @@ _CHOICE = PAIR_OUT + 5
 
 @part
 def _eberly_block(shape, P, n_j, k0, nb, out, exact, full):
-    """:func:`_robust_block` for the seed's method: rows with a non-finite
+    """:func:`_robust_block` for Eberly's algorithm: rows with a non-finite
     point are the only ones it leaves, and get NaN.
 
     The query runs in three passes over the block: the coefficients (rows

@@ -466,8 +466,8 @@ class Segment(_Hull):
     ``parameter``, on feature ``VERTEX0`` (``t = 0``), ``VERTEX1``
     (``t = 1``) or ``EDGE01``.  Methods: ``robust`` (within ``8 eps S +
     2^-1075`` of the exact distance, ``S = max(|P - V0|, |P - V1|)``) and
-    ``certified`` (faithfully rounded, with the exact feature); the seed
-    documents have no segment algorithm, so there is no ``eberly``.
+    ``certified`` (faithfully rounded, with the exact feature); Eberly's
+    two documents have no segment algorithm, so there is no ``eberly``.
 
     Examples
     --------

@@ -125,7 +125,7 @@ class Collection(Frozen):
             raise ValueError(f"points must have shape (..., 3); got shape {points.shape}")
         out_shape = points.shape[:-1]
         # A method's closest point may leave a primitive's box (``Method.loose``,
-        # the seed's circle); the hierarchy then has looser boxes for it.
+        # Eberly's circle); the hierarchy then has looser boxes for it.
         instanced = getattr(self, "_instanced", None)
         trees = (self._tree,) if instanced is None else instanced.trees
         loose = any(tree.loose for tree in trees) and method.loose
