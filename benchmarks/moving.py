@@ -52,16 +52,15 @@ The project's targets are checked apart (``OUT/checks-moving.txt``);
 """
 
 import argparse
-import json
 import os
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 import proximity
 from benchmarks.meshes import write_section
+from benchmarks.saving import measure_and_save
 from proximity.numerics.rigid import to_world
 from proximity.testing.meshes import icosphere, peer_mesh, reference
 
@@ -612,17 +611,7 @@ def main(argv=None):
     parser.add_argument("--out", default="bench-results", help="directory for moving.json")
     parser.add_argument("--write", metavar="PATH", help="rewrite the moving-bench section of this page")
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with np.errstate(all="ignore"):
-        raw = run(quick=args.quick, seed=args.seed, log=lambda text: print(text, file=sys.stderr, flush=True))
-    (out / "moving.json").write_text(json.dumps(raw, indent=1))
-    print(report(raw))
-    print(f"raw data: {out / 'moving.json'}")
-    missed, lines = checks(raw)
-    verdicts = out / "checks-moving.txt"
-    verdicts.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print(f"the project's targets: {len(lines) - missed} of {len(lines)} met ({verdicts})", file=sys.stderr)
+    raw = measure_and_save(args, "moving", run, report, checks)
     if args.write:
         write_section(args.write, markdown(raw, args.write), marker="moving-bench")
     return 0

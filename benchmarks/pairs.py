@@ -95,11 +95,9 @@ faces, ``--quick``: 1,280) are checked apart in
 """
 
 import argparse
-import json
 import os
 import sys
 import time
-from pathlib import Path
 
 import mpmath
 import numpy as np
@@ -107,6 +105,7 @@ import numpy as np
 import proximity
 from adapters.pybullet_backend import load as load_pybullet
 from benchmarks.moving import _installed, random_rotations
+from benchmarks.saving import measure_and_save
 from proximity.numerics.rigid import to_world
 from proximity.testing import exact
 from proximity.testing.exact import PREC
@@ -699,17 +698,7 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="bench-results", help="directory for pairs.json")
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with np.errstate(all="ignore"):
-        raw = run(quick=args.quick, seed=args.seed, log=lambda text: print(text, file=sys.stderr, flush=True))
-    (out / "pairs.json").write_text(json.dumps(raw, indent=1))
-    print(report(raw))
-    print(f"raw data: {out / 'pairs.json'}")
-    missed, lines = checks(raw)
-    verdicts = out / "checks-pairs.txt"
-    verdicts.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print(f"the project's target: {len(lines) - missed} of {len(lines)} met ({verdicts})", file=sys.stderr)
+    measure_and_save(args, "pairs", run, report, checks)
     return 0
 
 

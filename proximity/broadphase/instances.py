@@ -62,6 +62,8 @@ from .traverse import (
     Outputs,
     TreeArrays,
     descent,
+    new_outputs,
+    no_answer,
     reads_cull,
 )
 
@@ -205,27 +207,10 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                     winner = a
         undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
         if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
-            best_k = -1
-            dist[i] = math.inf
-            if full:
-                sqr[i] = math.inf
-                for c in range(3):
-                    point[i, c] = math.nan
-                    extra[i, c] = math.nan
-                feature[i] = NONE
-                flag[i] = False
-                prim[i] = -1
+            no_answer(i, math.inf, full, dist, sqr, point, extra, feature, flag, prim)
             continue
         if best_k < 0:
-            dist[i] = math.nan
-            if full:
-                sqr[i] = math.nan
-                for c in range(3):
-                    point[i, c] = math.nan
-                    extra[i, c] = math.nan
-                feature[i] = NONE
-                flag[i] = False
-                prim[i] = -1
+            no_answer(i, math.nan, full, dist, sqr, point, extra, feature, flag, prim)
             continue
         dist[i] = best
         # The winner's closest point, back in the world (summed as rigid.to_world).
@@ -442,17 +427,7 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
 
     points = readonly(points, np.float64)
     n = points.shape[0]
-    m = n if full else 0
-    out = Outputs(
-        distance=np.empty(n),
-        sqr_distance=np.empty(m),
-        point=np.empty((m, 3)),
-        feature=np.empty(m, np.int8),
-        extra=np.empty((m, 3)),
-        flag=np.empty(m, np.bool_),
-        index=np.empty(m, np.int64),
-        undecided=np.empty(n),
-    )
+    out = new_outputs(n, full)
     present = {p.code: p for tree in trees for p in tree.present}
     present = tuple(present[code] for code in sorted(present))
     kinds = present if len(present) == 1 else primitives.offering(method)

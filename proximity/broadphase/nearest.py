@@ -7,7 +7,7 @@ import numpy as np
 from .. import primitives
 from ..numerics.rounding import certify_difference
 from ._alloc import readonly
-from .traverse import Outputs, TreeArrays, _gather, reads_cull, search_kernel
+from .traverse import TreeArrays, _gather, new_outputs, reads_cull, search_kernel
 
 #: Bits of each coordinate in the Morton codes of the points: a 128^3 grid.
 MORTON_BITS = 7
@@ -94,17 +94,7 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     """
     points = readonly(points, np.float64)
     n = points.shape[0]
-    m = n if full else 0
-    out = Outputs(
-        distance=np.empty(n),
-        sqr_distance=np.empty(m),
-        point=np.empty((m, 3)),
-        feature=np.empty(m, np.int8),
-        extra=np.empty((m, 3)),
-        flag=np.empty(m, np.bool_),
-        index=np.empty(m, np.int64),
-        undecided=np.empty(n),
-    )
+    out = new_outputs(n, full)
     # A tree of one kind gets a search compiled for that kind alone; any
     # other, the one search for every kind that offers the method (not one
     # per combination).

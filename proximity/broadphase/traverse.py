@@ -62,6 +62,21 @@ TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bound
 #: result values and ``flag`` its boolean one (see :mod:`proximity.primitives`).
 Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature extra flag index undecided")
 
+
+def new_outputs(n, full):
+    """:data:`Outputs` for ``n`` points, all but ``distance`` and ``undecided`` empty unless ``full``."""
+    m = n if full else 0
+    return Outputs(
+        distance=np.empty(n),
+        sqr_distance=np.empty(m),
+        point=np.empty((m, 3)),
+        feature=np.empty(m, np.int8),
+        extra=np.empty((m, 3)),
+        flag=np.empty(m, np.bool_),
+        index=np.empty(m, np.int64),
+        undecided=np.empty(n),
+    )
+
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C2F32 = types.Array(types.float32, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
@@ -116,6 +131,22 @@ RADIUS = -1
 # function, and the rest of the chain.
 LOW = HIGH = 0
 ROW = NEXT = CALL = None
+
+
+@inline
+def no_answer(i, value, full, dist, sqr, point, extra, feature, flag, prim):
+    """Row ``i`` of a search's outputs without an answer: distance ``value`` (``inf``: nothing
+    within the cutoff; NaN: no primitive answers), NaN points and parameters, feature
+    ``NONE``, no flag and no primitive."""
+    dist[i] = value
+    if full:
+        sqr[i] = value
+        for c in range(3):
+            point[i, c] = math.nan
+            extra[i, c] = math.nan
+        feature[i] = NONE
+        flag[i] = False
+        prim[i] = -1
 
 
 @inline
@@ -317,27 +348,10 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
         finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
         if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
             # Nothing within the cutoff (or an answer beyond it).
-            best_k = -1
-            dist[i] = math.inf
-            if full:
-                sqr[i] = math.inf
-                for c in range(3):
-                    point[i, c] = math.nan
-                    extra[i, c] = math.nan
-                feature[i] = NONE
-                flag[i] = False
-                prim[i] = -1
+            no_answer(i, math.inf, full, dist, sqr, point, extra, feature, flag, prim)
             continue
         if best_k < 0:
-            dist[i] = math.nan
-            if full:
-                sqr[i] = math.nan
-                for c in range(3):
-                    point[i, c] = math.nan
-                    extra[i, c] = math.nan
-                feature[i] = NONE
-                flag[i] = False
-                prim[i] = -1
+            no_answer(i, math.nan, full, dist, sqr, point, extra, feature, flag, prim)
             continue
         dist[i] = best
         if full:
