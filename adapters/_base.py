@@ -29,8 +29,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 import proximity
-
-from .. import Feature, TriangleMesh, primitives
+from proximity import Feature, TriangleMesh, primitives
 
 EPS = float(np.finfo(np.float64).eps)
 

@@ -43,12 +43,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import proximity
+from proximity import Feature, TriangleMesh
+from proximity.results import PairResult
+from proximity.shapes.base import Point, Segment, Triangle
+from proximity.shapes.posed import Posed
+from proximity.shapes.rounded import Inflated
 
-from .. import Feature, TriangleMesh
-from ..results import PairResult
-from ..shapes.base import Point, Segment, Triangle
-from ..shapes.posed import Posed
-from ..shapes.rounded import Inflated
 from ._base import EPS, Failure, Model, best_method, norm, pow2_scale
 
 #: Kind of each core type, and of its rounded form.

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from proximity import Circle, Disk, Triangle
-from proximity import shapes as shapes_module
 from proximity.results import asdict
+from proximity.shapes import base as shapes_module
 from proximity.testing import scenes
 
 METHODS = ["robust", "eberly", "certified"]
