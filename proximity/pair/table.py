@@ -64,7 +64,7 @@ class Pair:
     >>> import proximity
     >>> p = proximity.pair.table.lookup("triangle", "segment")
     >>> p.module, p.swapped
-    ('segment_triangle', True)
+    ('pair.segment_triangle', True)
     """
 
     a: object
