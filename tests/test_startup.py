@@ -20,9 +20,10 @@ def _run(tmp_path, cache_home):
     shutil.copytree(
         pathlib.Path(proximity.__file__).parent, package, ignore=shutil.ignore_patterns("__pycache__")
     )
-    # A file where the cache directory would go: even root cannot make it, as
+    # A file where each folder's cache directory would go: even root cannot make them, as
     # in a read-only install.
-    (package / "__pycache__").write_text("")
+    for folder in [package, *(d for d in package.rglob("*") if d.is_dir())]:
+        (folder / "__pycache__").write_text("")
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env.update(PYTHONPATH=str(tmp_path / "site"), XDG_CACHE_HOME=str(cache_home), HOME=str(cache_home))
     return subprocess.run(
