@@ -182,13 +182,14 @@ def _fcl(vertices, faces):
     return model
 
 
-def fcl_query(mesh_a, mesh_b):
-    """A function of a pose: fcl's distance between the meshes, b posed."""
+def fcl_query(mesh_a, mesh_b, points=False):
+    """A function of a pose: fcl's distance between the meshes, b posed (with its nearest points
+    where ``points``)."""
     import fcl
 
     a = fcl.CollisionObject(_fcl(*mesh_a), fcl.Transform())
     b = fcl.CollisionObject(_fcl(*mesh_b), fcl.Transform())
-    request = fcl.DistanceRequest()
+    request = fcl.DistanceRequest(enable_nearest_points=points)
 
     def query(pose, reach):
         b.setTransform(fcl.Transform(pose[:3, :3], pose[:3, 3]))
@@ -223,13 +224,20 @@ def coal_query(mesh_a, mesh_b):
     return query
 
 
-def proximity_query(mesh_a, mesh_b, method):
+def proximity_query(mesh_a, mesh_b, method, points=False):
+    """A function of a pose: proximity's distance between the meshes, b posed (its closest points
+    too where ``points``, the witnesses read as a user reads them)."""
     a, b = proximity.TriangleMesh(*mesh_a), proximity.TriangleMesh(*mesh_b)
 
     def query(pose, reach):
         return float(proximity.distance(a, b.transformed(pose), method=method))
 
-    return query
+    def closest(pose, reach):
+        r = proximity.closest_points(a, b.transformed(pose), method=method)
+        _ = r.point_a, r.point_b
+        return float(r.distance)
+
+    return closest if points else query
 
 
 def trimesh_other_query(mesh_a, mesh_b):
@@ -303,8 +311,11 @@ def _pybullet_query(hull_a, hull_b):
 #: threshold pybullet needs); repeats ``None``: the run's, else that many.
 LIBRARIES = (
     ("robust", "proximity, robust", None, lambda a, b: proximity_query(a, b, "robust"), None),
+    ("robust_points", "proximity, robust, closest points", None,
+     lambda a, b: proximity_query(a, b, "robust", points=True), None),
     ("certified", "proximity, certified", None, lambda a, b: proximity_query(a, b, "certified"), None),
     ("fcl", "python-fcl", "fcl", fcl_query, None),
+    ("fcl_points", "python-fcl, nearest points", "fcl", lambda a, b: fcl_query(a, b, points=True), None),
     ("coal", "coal", "coal", coal_query, None),
     ("trimesh", "trimesh, min_distance_other", "trimesh fcl", trimesh_other_query, None),
     ("trimesh_single", "trimesh, min_distance_single", "trimesh fcl", trimesh_single_query, 1),
@@ -371,22 +382,23 @@ def _frame(vertices):
     return np.stack([x, np.cross(z, x), z], axis=-1), centre, length
 
 
-def _peer_calls(name, kind, a, b, radius, calls):
-    """``(seconds per call, distances)`` of ``calls`` pairs by python-fcl or coal, one call each:
+def _peer_call(name, kind, a, b, radius):
+    """One call of python-fcl or coal for pair ``i`` of ``a``, ``b``, as a function of ``i`` that
+    gives ``(distance, nearest points)``, the points read as their users read them (python-fcl's
+    ``nearest_points`` with ``enable_nearest_points``, coal's ``getNearestPoint1`` and ``2``):
     capsules (radius 0: segments) by their primitives, triangles as one-triangle hierarchies
     (neither answers a triangle primitive against another)."""
     lib = __import__(name)
-    a, b = a[:calls], b[:calls]
     if kind == "triangle":
         objects = [[_coal(t, [[0, 1, 2]]) if name == "coal" else _fcl(t, [[0, 1, 2]]) for t in side]
                    for side in (a, b)]  # fmt: skip
-        poses = [[np.eye(4)] * calls] * 2
+        poses = [[np.eye(4)] * len(a)] * 2
     else:
         objects, poses = [], []
         for side in (a, b):
             rotation, centre, length = _frame(side)
             objects.append([lib.Capsule(radius, float(h)) for h in length])
-            pose = np.tile(np.eye(4), (calls, 1, 1))
+            pose = np.tile(np.eye(4), (len(side), 1, 1))
             pose[:, :3, :3], pose[:, :3, 3] = rotation, centre
             poses.append(pose)
     if name == "coal":
@@ -396,19 +408,84 @@ def _peer_calls(name, kind, a, b, radius, calls):
         def one(i):
             result.clear()
             o, t = objects, transforms
-            return lib.distance(o[0][i], t[0][i], o[1][i], t[1][i], request, result)
-    else:
-        request = lib.DistanceRequest()
-        pairs = [[lib.CollisionObject(o, lib.Transform(p[:3, :3], p[:3, 3])) for o, p in zip(objs, side,
-                  strict=True)] for objs, side in zip(objects, poses, strict=True)]  # fmt: skip
+            d = lib.distance(o[0][i], t[0][i], o[1][i], t[1][i], request, result)
+            return d, (result.getNearestPoint1(), result.getNearestPoint2())
 
-        def one(i):
-            return lib.distance(pairs[0][i], pairs[1][i], request, lib.DistanceResult())
+        return one
+    request = lib.DistanceRequest(enable_nearest_points=True)
+    pairs = [[lib.CollisionObject(o, lib.Transform(p[:3, :3], p[:3, 3])) for o, p in zip(objs, side,
+              strict=True)] for objs, side in zip(objects, poses, strict=True)]  # fmt: skip
 
+    def one(i):
+        result = lib.DistanceResult()
+        d = lib.distance(pairs[0][i], pairs[1][i], request, result)
+        return d, result.nearest_points
+
+    return one
+
+
+def _peer_calls(name, kind, a, b, radius, calls):
+    """``(seconds per call, distances)`` of ``calls`` pairs by python-fcl or coal, one call each
+    (:func:`_peer_call`)."""
+    one = _peer_call(name, kind, a[:calls], b[:calls], radius)
     one(0)
     start = time.perf_counter()
-    out = [one(i) for i in range(calls)]
+    out = [one(i)[0] for i in range(calls)]
     return (time.perf_counter() - start) / calls, np.array(out, dtype=np.float64)
+
+
+#: The single calls timed: kinds of primitive pairs, and the radius of capsules.
+SINGLE_KINDS = (("capsule", 0.25), ("segment", 0.0), ("triangle", 0.0))
+
+
+def _single_calls(kind, a, b, radius):
+    """``{library: function of a pair index}``: one warm call for one pair of shapes, proximity's
+    witnesses read as its users read them (``point_a`` and ``point_b``), the peers' as
+    :func:`_peer_call` reads them."""
+    if radius:
+        capsules = proximity.Capsule
+        ours = [(capsules(x, radius), capsules(y, radius)) for x, y in zip(a, b, strict=True)]
+    else:
+        make = proximity.Triangle if kind == "triangle" else proximity.Segment
+        ours = [(make(x), make(y)) for x, y in zip(a, b, strict=True)]
+
+    def closest_points(i):
+        r = proximity.closest_points(*ours[i])
+        return r.distance, r.point_a, r.point_b
+
+    def distance(i):
+        return proximity.distance(*ours[i])
+
+    calls = {"closest_points": closest_points, "distance": distance}
+    for name in ("fcl", "coal"):
+        if not _installed(name):
+            calls[name] = _peer_call(name, kind, a, b, radius)
+    return calls
+
+
+def single_calls(rng, quick, log=print):
+    """Warm single calls of one pair of primitives, proximity's ``closest_points`` and ``distance``
+    against python-fcl's and coal's distance with nearest points: the least time per call over
+    rounds in which each library takes its turn, on the same pairs."""
+    pairs, rounds = (200, 3) if quick else (1000, 7)
+    rows = []
+    for kind, radius in SINGLE_KINDS:
+        nv = 3 if kind == "triangle" else 2
+        a = rng.uniform(-1.0, 1.0, (pairs, nv, 3))
+        b = a.mean(axis=1, keepdims=True) + rng.normal(0.0, 0.5, (pairs, nv, 3))
+        calls = _single_calls(kind, a, b, radius)
+        best = {name: np.inf for name in calls}
+        for one in calls.values():  # compiled and warm outside the timing
+            one(0)
+        for _ in range(rounds):
+            for name, one in calls.items():
+                start = time.perf_counter()
+                for i in range(pairs):
+                    one(i)
+                best[name] = min(best[name], (time.perf_counter() - start) / pairs)
+        rows.append({"kind": kind, "radius": radius, "pairs": pairs, "seconds": best})
+        log(f"single {kind} pair: " + ", ".join(f"{k} {v * 1e6:.2f} us" for k, v in best.items()))
+    return rows
 
 
 def _numpy_segments(a, b):
@@ -444,13 +521,20 @@ def primitives(rng, quick, log=print, sizes=None):
         sa, sb = shape(a), shape(b)
         if radius:
             sa, sb = proximity.Capsule(a, radius), proximity.Capsule(b, radius)
-        proximity.distance(shape(a[:10]), shape(b[:10]))  # compiled outside the timing
-        best = np.inf
+        proximity.closest_points(shape(a[:10]), shape(b[:10]))  # compiled outside the timing
+        proximity.distance(shape(a[:10]), shape(b[:10]))
+        best = {"distance": np.inf, "closest_points": np.inf}
         for _ in range(3):
-            start = time.perf_counter()
-            ours = proximity.distance(sa, sb)
-            best = min(best, time.perf_counter() - start)
-        row = {"kind": kind, "pairs": n, "radius": radius, "proximity": n / best, "libraries": {}}
+            for name in ("distance", "closest_points"):
+                call = getattr(proximity, name)
+                start = time.perf_counter()
+                answer = call(sa, sb)
+                best[name] = min(best[name], time.perf_counter() - start)
+                if name == "distance":
+                    ours = answer
+            del answer
+        row = {"kind": kind, "pairs": n, "radius": radius, "proximity": n / best["distance"],
+               "proximity_points": n / best["closest_points"], "libraries": {}}  # fmt: skip
         reference = []
         for i in range(sample):
             if kind == "triangle":
@@ -578,9 +662,10 @@ def run(quick=False, seed=0, log=print):
         sizes.append({"faces": [len(mesh_a[1]), len(mesh_b[1])], "rows": rows, "gaps": gaps})
     distances = hausdorff(mesh_a, mesh_b, rng, quick, log)
     batches = primitives(rng, quick, log)
+    single = single_calls(rng, quick, log)
     meta = {"cpus": os.cpu_count(), "quick": quick, "seed": seed, "poses": count, "repeats": repeats,
             "load_average": list(os.getloadavg()), "proximity": proximity.__version__}  # fmt: skip
-    return {"meta": meta, "meshes": sizes, "hausdorff": distances, "primitives": batches}
+    return {"meta": meta, "meshes": sizes, "hausdorff": distances, "primitives": batches, "single": single}
 
 
 def checks(raw):
@@ -599,17 +684,55 @@ def checks(raw):
             missed += not met
             lines.append(f"{'met   ' if met else 'MISSED'}  mesh-mesh at 1e-2 against {key}: {ratio:.1f}x "
                          "(target at least 2x)")  # fmt: skip
+    for row in raw["meshes"][-1]["gaps"] if raw.get("meshes") else []:
+        if row["gap"] != 1e-2 or "robust_points" not in row["libraries"]:
+            continue
+        libraries = row["libraries"]
+        points = libraries["robust_points"]["time"]
+        ratio = points / libraries["robust"]["time"]
+        missed += not ratio <= 1.2
+        lines.append(f"{_verdict(ratio <= 1.2)}  mesh-mesh at 1e-2, closest_points against distance: "
+                     f"{ratio:.2f}x (target at most 1.2x)")  # fmt: skip
+        if "fcl_points" in libraries and "time" in libraries["fcl_points"]:
+            ratio = libraries["fcl_points"]["time"] / points
+            missed += not ratio >= 1.5
+            lines.append(f"{_verdict(ratio >= 1.5)}  mesh-mesh at 1e-2, closest_points against python-fcl "
+                         f"with nearest points: {ratio:.1f}x (target at least 1.5x)")  # fmt: skip
     for row in raw.get("primitives", []):
         peer = row["libraries"].get("coal", {})
         if "rate" not in peer:
             lines.append(f"skipped  {row['kind']} pairs against coal: not measured")
             continue
-        ratio = row["proximity"] / peer["rate"]
-        met = ratio >= 20.0
+        for key, what in (("proximity", "distance"), ("proximity_points", "closest_points")):
+            if key not in row:
+                continue
+            ratio = row[key] / peer["rate"]
+            missed += not ratio >= 20.0
+            lines.append(f"{_verdict(ratio >= 20.0)}  batched {row['kind']} pairs, {what}, against coal per "
+                         f"call: {ratio:.0f}x (target at least 20x)")  # fmt: skip
+        if "proximity_points" in row:
+            ratio = row["proximity"] / row["proximity_points"]
+            missed += not ratio <= 1.5
+            lines.append(f"{_verdict(ratio <= 1.5)}  batched {row['kind']} pairs, closest_points against "
+                         f"distance: {ratio:.2f}x the time (target at most 1.5x)")  # fmt: skip
+    for row in raw.get("single", []):
+        if row["kind"] not in ("capsule", "segment"):
+            continue
+        ours = row["seconds"]["closest_points"]
+        met = ours <= 2e-6
         missed += not met
-        lines.append(f"{'met   ' if met else 'MISSED'}  batched {row['kind']} pairs against coal per call: "
-                     f"{ratio:.0f}x (target at least 20x)")  # fmt: skip
+        lines.append(f"{_verdict(met)}  single {row['kind']} pair, closest_points: {ours * 1e6:.2f} us "
+                     "(target at most 2 us)")  # fmt: skip
+        if "fcl" in row["seconds"]:
+            fcl = row["seconds"]["fcl"]
+            missed += not ours <= fcl
+            text = f"python-fcl with nearest points: {ours * 1e6:.2f} against {fcl * 1e6:.2f} us"
+            lines.append(f"{_verdict(ours <= fcl)}  single {row['kind']} pair, closest_points against {text}")
     return missed, lines
+
+
+def _verdict(met):
+    return "met   " if met else "MISSED"
 
 
 def _cell(result):
@@ -653,6 +776,8 @@ def report(raw):
         lines += hausdorff_report(raw["hausdorff"])
     if "primitives" in raw:
         lines += primitives_report(raw["primitives"])
+    if "single" in raw:
+        lines += single_report(raw["single"])
     lines.append(f"load average during the run: {meta['load_average']}")
     return "\n".join(lines)
 
@@ -675,12 +800,25 @@ def hausdorff_report(distances):
     return lines
 
 
+def single_report(rows):
+    """The warm single calls as text: microseconds per call."""
+    lines = ["single calls, warm, one pair: proximity's closest_points and distance against "
+             "python-fcl's and coal's distance with nearest points; microseconds per call"]  # fmt: skip
+    for row in rows:
+        cells = ", ".join(f"{name} {seconds * 1e6:.2f}" for name, seconds in row["seconds"].items())
+        lines.append(f"  {row['kind']:>8s}: {cells}")
+    return lines
+
+
 def primitives_report(rows):
     """The batched primitive pairs as text: pairs per second, and the largest error."""
-    lines = ["primitive pairs: proximity's batch (robust, all threads) against one call per pair "
-             "(python-fcl, coal) and vectorised NumPy; pairs per second (largest error)"]  # fmt: skip
+    lines = ["primitive pairs: proximity's batch (robust, all threads: distance, and closest_points) against "
+             "one call per pair with nearest points (python-fcl, coal) and vectorised NumPy (distances); "
+             "pairs per second (largest error)"]  # fmt: skip
     for row in rows:
         cells = [f"proximity {row['proximity']:,.0f} ({row['error']:.1e})"]
+        if "proximity_points" in row:
+            cells.append(f"closest_points {row['proximity_points']:,.0f}")
         for name, peer in row["libraries"].items():
             if "skipped" in peer:
                 cells.append(f"{name} skipped")

@@ -215,8 +215,27 @@ def test_the_primitive_pair_rows_are_exact_within_the_bound_and_name_their_peers
     # The NumPy baseline agrees on the segments (no degenerate ones among random pairs).
     assert rows[0]["libraries"]["numpy"]["error"] < 1e-12
     missed, lines = pairs.checks({"gaps": [], "primitives": rows})
-    assert len(lines) == 3 and missed == sum(line.startswith("MISSED") for line in lines)
+    # Per kind: distance and closest_points against coal and one against the other, or one line skipped.
+    expected = sum(3 if "rate" in row["libraries"]["coal"] else 1 for row in rows)
+    assert len(lines) == expected and missed == sum(line.startswith("MISSED") for line in lines)
     assert "capsule (2,000 pairs)" in "\n".join(pairs.primitives_report(rows))
+    assert all(row["proximity_points"] > 0 for row in rows)
+
+
+def test_the_single_call_rows_time_every_library_on_the_same_pairs():
+    import numpy as np
+
+    from benchmarks import pairs
+
+    rows = pairs.single_calls(np.random.default_rng(2), True, log=lambda _: None)
+    assert [row["kind"] for row in rows] == [kind for kind, _ in pairs.SINGLE_KINDS]
+    for row in rows:
+        assert {"closest_points", "distance"} <= set(row["seconds"])
+        assert all(0 < seconds < np.inf for seconds in row["seconds"].values())
+    missed, lines = pairs.checks({"gaps": [], "single": rows})
+    assert missed == sum(line.startswith("MISSED") for line in lines)
+    assert sum("closest_points:" in line for line in lines) == 2  # capsules and segments
+    assert "capsule:" in "\n".join(pairs.single_report(rows))
 
 
 def test_the_memory_row_measures_a_query_in_a_fresh_process():
