@@ -3,6 +3,8 @@
 And the answers are within the robust bound of the exact reference.
 """
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,9 @@ from proximity.broadphase import refit as refit_module
 from proximity.shapes.scene import BRUTE_FORCE_MAX
 from proximity.testing import exact
 from proximity.testing.meshes import box_points, icosphere, near_points, soup, torus
+
+# The module, which the package's ``broadphase.nearest`` (the function) hides.
+nearest_module = importlib.import_module("proximity.broadphase.nearest")
 
 EPS = 2.0**-52
 METHODS = list(TriangleMesh.methods)
@@ -555,3 +560,87 @@ def test_the_bounds_a_tree_keeps_hold_what_they_bound(scale, offset, exact_range
     points = box_points(np.random.default_rng(5), vertices, 300)
     brute = TriangleMesh(vertices, faces, broad_phase="brute")
     assert_same(brute.closest_point(points), mesh.closest_point(points))
+
+
+# --- Large batches: the visiting order and the memory a query takes ----------------------------
+
+
+def _numpy_morton_order(points):
+    """The Morton order as NumPy computed it before the compiled sort (the
+    reference): cells of a 128^3 grid over the finite points' box, NaN and
+    ``+inf`` in the last cell of their axis, ``-inf`` in the first, and two
+    stable sorts of the codes' low 11 and high 10 bits."""
+    top = (1 << nearest_module.MORTON_BITS) - 1
+    kept = points[np.isfinite(points).all(axis=1)]
+    if len(kept) == 0:
+        return np.arange(len(points))
+    low, high = kept.min(axis=0), kept.max(axis=0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        span = float(np.max(high - low))
+        inv = top / span if 0.0 < span < np.inf else 0.0
+        g = (points - low) * inv
+        g = np.where(g >= 0.0, g, np.where(g < 0.0, 0.0, float(top)))
+        cells = np.minimum(g, float(top)).astype(np.int64)
+    spread = nearest_module._SPREAD
+    code = spread[cells[:, 0]] | (spread[cells[:, 1]] << 1) | (spread[cells[:, 2]] << 2)
+    first = np.argsort((code & 0x7FF).astype(np.uint16), kind="stable")
+    return first[np.argsort((code[first] >> 11).astype(np.uint16), kind="stable")]
+
+
+def _batches():
+    rng = np.random.default_rng(11)
+    holes = rng.uniform(-1, 1, (20_000, 3))
+    holes[rng.random(holes.shape) < 0.03] = np.nan
+    holes[rng.random(holes.shape) < 0.03] = np.inf
+    holes[rng.random(holes.shape) < 0.03] = -np.inf
+    same = np.ones((6000, 3))
+    same[::7, 1], same[::11, 2], same[::13, 0] = -np.inf, np.nan, np.inf
+    wide = rng.uniform(-1, 1, (6000, 3))
+    wide[0, 0], wide[1, 0], wide[2, 1] = -1e308, 1e308, -np.inf  # an extent beyond the float range
+    return {
+        "uniform": rng.uniform(-1, 1, (30_000, 3)),
+        "clustered": np.concatenate([rng.normal(c, 1e-4, (5000, 3)) for c in rng.uniform(-9, 9, (6, 3))]),
+        "on a few cells": rng.integers(0, 3, (20_000, 3)).astype(float),  # runs of one cell to keep stable
+        "non-finite": holes,
+        "one point, repeated": same,
+        "none finite": np.full((5000, 3), np.nan),
+        "wider than the float range": wide,
+        "flat": np.c_[rng.uniform(size=(8000, 2)), np.zeros(8000)],
+        "subnormal": rng.uniform(size=(8000, 3)) * 1e-310,
+        "huge": rng.uniform(-1, 1, (8000, 3)) * 1e300,
+        "empty": np.zeros((0, 3)),
+        "one": np.ones((1, 3)),
+    }
+
+
+BATCHES = _batches()
+
+
+@pytest.mark.parametrize("one_pass", [False, True])
+@pytest.mark.parametrize("name", list(BATCHES))
+def test_the_compiled_morton_order_is_numpys_permutation(name, one_pass, monkeypatch):
+    """The compiled sort gives the permutation NumPy's stable sorts gave, by
+    either of its sorts (one counting pass over every cell, or two over the
+    codes' low and high bits)."""
+    monkeypatch.setattr(nearest_module, "ONE_PASS_MIN", 0 if one_pass else 1 << 62)
+    points = BATCHES[name]
+    order = nearest_module._morton_order(points)
+    assert order.dtype == np.int64 and order.flags.writeable
+    np.testing.assert_array_equal(order, _numpy_morton_order(points))
+
+
+def test_a_batch_wider_than_the_float_range_is_answered_as_its_points_one_by_one():
+    """Points from -1e308 to 1e308 span more than the float range: the grid's
+    scale was inf * 0 = NaN for the farthest, whose cell index then failed
+    the lookup of its code (IndexError) in any batch large enough to sort."""
+    vertices, faces = MESHES["icosphere"]
+    mesh = TriangleMesh(vertices, faces)
+    points = np.random.default_rng(12).uniform(-2, 2, (nearest_module.SORT_MIN + 10, 3))
+    points[0, 0], points[1, 0], points[2] = -1e308, 1e308, [0.0, 1e308, -1e308]
+    batch = mesh.closest_point(points)
+    one_by_one = [mesh.closest_point(p) for p in points[:3]] + [mesh.closest_point(points[3:100])]
+    for name in FIELDS:
+        joined = np.concatenate([np.reshape(getattr(r, name), (-1,) + getattr(batch, name).shape[1:])
+                                 for r in one_by_one])  # fmt: skip
+        np.testing.assert_array_equal(getattr(batch, name)[:100], joined, err_msg=name)
+    assert np.isfinite(batch.distance).all()

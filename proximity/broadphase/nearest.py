@@ -3,14 +3,27 @@
 import math
 
 import numpy as np
+from numba.core import types
 
 from .. import primitives
 from ..numerics.rounding import certify_difference
+from ..runtime.jit import specialize
 from ._alloc import readonly
 from .traverse import TreeArrays, _gather, new_outputs, reads_cull, search_kernel
 
 #: Bits of each coordinate in the Morton codes of the points: a 128^3 grid.
 MORTON_BITS = 7
+#: The largest cell coordinate, and the number of cells.
+_TOP = (1 << MORTON_BITS) - 1
+_CELLS = 1 << (3 * MORTON_BITS)
+#: The two passes of the sort of smaller batches: the codes' low bits, then the rest.
+_LOW_BITS = 11
+_LOW_MASK = (1 << _LOW_BITS) - 1
+#: From this many points on, the codes are sorted in one counting pass over
+#: every cell: its counts (16 MiB) cost at most 8 bytes a point, and no
+#: second array of indices is needed.  Smaller batches take two passes over
+#: 2^11 and 2^10 counts, through a 4-byte index a point.
+ONE_PASS_MIN = 1 << 21
 
 
 def _spread():
@@ -25,31 +38,106 @@ def _spread():
 _SPREAD = _spread()
 
 
+def _morton(points, codes, counts, spare, order):
+    """The Morton order of ``points`` into ``order`` (see :func:`_morton_order`).
+
+    ``codes`` holds a code a point; ``counts`` and ``spare`` are scratch:
+    where ``spare`` is empty, ``counts`` has an entry a cell, and the codes
+    are sorted in one counting pass; else ``spare`` has an index a point,
+    ``counts`` at least ``2^11`` entries, and the sort takes two stable
+    counting passes, on the codes' low 11 bits and then on the rest.
+
+    One function without helpers: each would be compiled on its own, and
+    this is compiled at a first large batch.
+    """
+    n = points.shape[0]
+    # The box of the finite points.
+    lx, ly, lz = math.inf, math.inf, math.inf
+    hx, hy, hz = -math.inf, -math.inf, -math.inf
+    for i in range(n):
+        x, y, z = points[i, 0], points[i, 1], points[i, 2]
+        if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
+            lx, ly, lz = min(lx, x), min(ly, y), min(lz, z)
+            hx, hy, hz = max(hx, x), max(hy, y), max(hz, z)
+    if not lx <= hx:  # no finite point: the order they come in
+        for i in range(n):
+            order[i] = i
+        return
+    span = max(max(hx - lx, hy - ly), hz - lz)
+    # An extent beyond the float range (or none) puts every point in one cell
+    # but those whose offset from the corner overflows (inf * 0: NaN, the last).
+    inv = _TOP / span if 0.0 < span < math.inf else 0.0
+    low = (lx, ly, lz)
+    for i in range(n):
+        code = 0
+        for c in range(3):
+            # (v - low) * inv truncated to 0 .. _TOP: below 0 (-inf) the first cell, NaN the last.
+            g = (points[i, c] - low[c]) * inv
+            cell = _TOP
+            if g >= 0.0:
+                cell = int(min(g, float(_TOP)))
+            elif g < 0.0:
+                cell = 0
+            code |= _SPREAD[cell] << c
+        codes[i] = code
+    one = spare.shape[0] == 0
+    for step in range(1 if one else 2):
+        # Keys (code >> shift) & (keys - 1); the passes run least significant first.
+        shift = _LOW_BITS if step == 1 else 0
+        keys = _CELLS if one else (_LOW_MASK + 1 if step == 0 else _CELLS >> _LOW_BITS)
+        for k in range(keys):
+            counts[k] = 0
+        for i in range(n):
+            counts[(codes[i] >> shift) & (keys - 1)] += 1
+        start = 0  # counts[k]: where the run of key k starts
+        for k in range(keys):
+            c = counts[k]
+            counts[k] = start
+            start += c
+        for j in range(n):
+            i = j if step == 0 else np.int64(spare[j])
+            k = (codes[i] >> shift) & (keys - 1)
+            if one or step == 1:
+                order[counts[k]] = i
+            else:
+                spare[counts[k]] = i
+            counts[k] += 1
+
+
+_MORTON_SIGNATURE = types.void(
+    types.Array(types.float64, 2, "C", readonly=True),
+    types.Array(types.uint32, 1, "C"),
+    types.Array(types.int64, 1, "C"),
+    types.Array(types.uint32, 1, "C"),
+    types.Array(types.int64, 1, "C"),
+)
+
+
 def _morton_order(points):
     """The points in Morton order on a 128^3 grid over their finite bounding
-    box (points with a non-finite coordinate go to the last cell): the
-    sequence of their indices, stable within a cell.
+    box: the sequence of their indices, stable within a cell.
 
-    In NumPy, so that no batch size compiles a kernel of its own: the
-    21-bit codes are sorted by two stable passes on their low 11 and high 10
-    bits, each a radix sort of 16-bit keys.
+    A point with a non-finite coordinate is placed by its finite ones, NaN
+    and ``+inf`` in the last cell of their axis and ``-inf`` in the first
+    (the last, too, where the finite points span no extent, or one beyond
+    the float range, where every point is in one cell but those whose
+    offset overflows).
+
+    One compiled kernel of one signature, so that no batch size compiles
+    a kernel of its own; it allocates nothing, its arrays are NumPy's:
+    with the order, 16 bytes a point below :data:`ONE_PASS_MIN` points
+    and at most 20 from there on, where NumPy's temporaries and sorts of
+    the codes took 80.
     """
-    top = (1 << MORTON_BITS) - 1
-    every = bool(np.isfinite(points).all())
-    kept = points if every else points[np.isfinite(points).all(axis=1)]
-    if len(kept) == 0:
-        return np.arange(len(points))
-    low, high = kept.min(axis=0), kept.max(axis=0)
-    span = float(np.max(high - low))
-    inv = top / span if 0.0 < span < math.inf else 0.0
-    with np.errstate(invalid="ignore", over="ignore"):
-        g = (points - low) * inv
-        if not every:  # NaN and +inf to the last cell, -inf to the first
-            g = np.where(g >= 0.0, g, np.where(g < 0.0, 0.0, float(top)))
-        cells = np.minimum(g, float(top)).astype(np.int64)
-    code = _SPREAD[cells[:, 0]] | (_SPREAD[cells[:, 1]] << 1) | (_SPREAD[cells[:, 2]] << 2)
-    first = np.argsort((code & 0x7FF).astype(np.uint16), kind="stable")
-    return first[np.argsort((code[first] >> 11).astype(np.uint16), kind="stable")]
+    points = readonly(points, np.float64)
+    n = points.shape[0]
+    one_pass = n >= ONE_PASS_MIN
+    codes = np.empty(n, np.uint32)
+    counts = np.empty(_CELLS if one_pass else _LOW_MASK + 1, np.int64)
+    spare = np.empty(0 if one_pass else n, np.uint32)
+    order = np.empty(n, np.int64)
+    specialize(_morton, "fixed", _MORTON_SIGNATURE)(points, codes, counts, spare, order)
+    return order
 
 
 #: Batches at least this large are queried in Morton order of the points.
