@@ -108,6 +108,7 @@ BOX_SLACK = 2.0**-40
 
 DESCEND = CALL = None
 SEED_POINT = True
+EXACT_FALLBACK = False
 
 
 def _instances_block(block, forest, roots, magnitudes, depth, inst, points, order, out, full, cutoff):
@@ -205,7 +206,8 @@ def _instances_block(block, forest, roots, magnitudes, depth, inst, points, orde
                 w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
                 if best_index != before:
                     winner = a
-        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
+        if EXACT_FALLBACK:
+            undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
         if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
             no_answer(i, math.inf, full, dist, sqr, point, extra, feature, flag, prim)
             continue
@@ -305,6 +307,7 @@ def instances_kernel(method, present, radius=-1, indexed=False):
         role="pointer",
         DESCEND=descent(method, present, radius, indexed),
         SEED_POINT=not method.loose,
+        EXACT_FALLBACK=method.exact_fallback,
     )
     loop = "instances_indexed" if indexed else "instances"
     return launcher(_loop, loop, loop_signature, block, block_signature, _blocks, SEARCH_GRAIN)
@@ -427,14 +430,14 @@ def nearest_instances(trees, instances, method, points, full, loose=False, cutof
 
     points = readonly(points, np.float64)
     n = points.shape[0]
-    out = new_outputs(n, full)
+    order = readonly(_visiting_order(points), np.int64)  # before the outputs, as nearest's
+    out = new_outputs(n, full, method.exact_fallback)
     present = {p.code: p for tree in trees for p in tree.present}
     present = tuple(present[code] for code in sorted(present))
     kinds = present if len(present) == 1 else primitives.offering(method)
     # The radius column forest gives: any tree's (its rows are padded to one width).
     culls = reads_cull(method, kinds, max(tree.radius for tree in trees))
     arrays, roots, magnitudes, depth, radius = forest(tuple(trees), loose, culls)
-    order = readonly(_visiting_order(points), np.int64)
     search = instances_kernel(method, kinds, radius, len(trees) == 1 and trees[0].indexed)
     search(arrays, roots, magnitudes, depth, instances, points, order, out, full, float(cutoff))
     rows = np.flatnonzero(~np.isnan(out.undecided))

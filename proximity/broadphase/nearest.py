@@ -182,14 +182,15 @@ def nearest(tree, method, points, full, loose=False, cutoff=math.inf):
     """
     points = readonly(points, np.float64)
     n = points.shape[0]
-    out = new_outputs(n, full)
+    # The order before the outputs: its sort's scratch is gone before they are written.
+    order = readonly(_visiting_order(points), np.int64)
+    out = new_outputs(n, full, method.exact_fallback)
     # A tree of one kind gets a search compiled for that kind alone; any
     # other, the one search for every kind that offers the method (not one
     # per combination).
     kinds = tree.present if len(tree.present) == 1 else primitives.offering(method)
     bounds, cull, magnitude = tree.boxes(loose, reads_cull(method, kinds, tree.radius))
     arrays = TreeArrays(tree.kinds, tree.rows(), tree.index, cull, bounds, tree.child, tree.count)
-    order = readonly(_visiting_order(points), np.int64)
     # Work per point varies by orders of magnitude (a point at the center of
     # a sphere is equidistant from every face), so blocks are handed out
     # one at a time rather than split evenly between threads up front.

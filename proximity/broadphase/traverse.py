@@ -63,8 +63,10 @@ TreeArrays = collections.namedtuple("TreeArrays", "kinds params index cull bound
 Outputs = collections.namedtuple("Outputs", "distance sqr_distance point feature extra flag index undecided")
 
 
-def new_outputs(n, full):
-    """:data:`Outputs` for ``n`` points, all but ``distance`` and ``undecided`` empty unless ``full``."""
+def new_outputs(n, full, exact):
+    """:data:`Outputs` for ``n`` points, all but ``distance`` and ``undecided`` empty unless
+    ``full``, and ``undecided`` empty unless ``exact``: only a method with an exact fallback
+    (``Method.exact_fallback``) leaves answers undecided, and only its search writes them."""
     m = n if full else 0
     return Outputs(
         distance=np.empty(n),
@@ -74,7 +76,7 @@ def new_outputs(n, full):
         extra=np.empty((m, 3)),
         flag=np.empty(m, np.bool_),
         index=np.empty(m, np.int64),
-        undecided=np.empty(n),
+        undecided=np.empty(n if exact else 0),
     )
 
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
@@ -283,7 +285,8 @@ def _descend(
 def _search_block(block, tree, depth, magnitude, points, order, out, full, cutoff):
     """Nearest primitive to each point of ``block`` (points ``block * BLOCK``
     on, in the sequence ``order``); with ``full=False`` only the distances
-    and ``undecided`` are written.
+    and ``undecided`` are written (``undecided`` by a method with an exact
+    fallback alone: for the others it is empty).
 
     ``cutoff`` (``inf`` for none) bounds the search from the start: a point
     with nothing within it gets an infinite distance, and no primitive
@@ -342,9 +345,10 @@ def _search_block(block, tree, depth, magnitude, points, order, out, full, cutof
             w_sqr, w_x, w_y, w_z, w_feature, w_a0, w_a1, w_a2, w_flag = state[5:]
         if best_k >= 0:
             near_x, near_y, near_z = w_x, w_y, w_z
-        # An undecided answer could be the least (or tie with it): resolve
-        # every candidate up to the bound exactly, outside the kernel.
-        undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
+        if EXACT_FALLBACK:
+            # An undecided answer could be the least (or tie with it): resolve
+            # every candidate up to the bound exactly, outside the kernel.
+            undecided[i] = min(best, upper) if lowest < math.inf and lowest <= min(best, cutoff) else math.nan
         finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
         if finite and (best > cutoff or (best_k < 0 and cutoff < math.inf)):
             # Nothing within the cutoff (or an answer beyond it).
@@ -492,6 +496,7 @@ def search_kernel(method, present, radius=-1, indexed=False):
         block_signature,
         role="pointer",
         DESCEND=descent(method, present, radius, indexed),
+        EXACT_FALLBACK=method.exact_fallback,
     )
     loop = "search_indexed" if indexed else "search"
     return launcher(_loop, loop, loop_signature, block, block_signature, _blocks, SEARCH_GRAIN)
