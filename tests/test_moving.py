@@ -1,6 +1,7 @@
 """Moving objects: posed views, instances, refitted meshes."""
 
 import pickle
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 import proximity
 from proximity import broadphase
 from proximity.broadphase.refit import REFIT_SUBTREE
-from proximity.numerics.rigid import to_local
+from proximity.numerics.rigid import to_local, to_world
 from proximity.results import asdict
 from proximity.testing import exact, examples
 from proximity.testing.meshes import icosphere, near_points, soup, torus
@@ -65,6 +66,51 @@ def test_posed_shapes_answer_as_the_shape_at_the_moved_points(name):
         np.testing.assert_allclose(r.point, _moved(T, np.asarray(core.point)), rtol=0, atol=1e-13)
         np.testing.assert_allclose(r.normal, np.asarray(core.normal) @ T[:3, :3].T, rtol=0, atol=1e-12)
         np.testing.assert_array_equal(posed.distance(world, method=method), r.distance)
+
+
+def _summed(points, rotation, translation, inverse):
+    """``R^T (P - t)`` (``inverse``) or ``R P + t``, each coordinate one expression summed left to right."""
+    if inverse:
+        d = points - translation
+        columns = [d[..., 0] * rotation[0, c] + d[..., 1] * rotation[1, c] + d[..., 2] * rotation[2, c]
+                   for c in range(3)]  # fmt: skip
+        return np.stack(columns, axis=-1)
+    p = points
+    rows = [p[..., 0] * rotation[c, 0] + p[..., 1] * rotation[c, 1] + p[..., 2] * rotation[c, 2]
+            for c in range(3)]  # fmt: skip
+    return np.stack(rows, axis=-1) + translation
+
+
+@pytest.mark.parametrize("shape", [(3,), (1, 3), (5000, 3), (7, 11, 3), (0, 3)])
+def test_points_move_with_the_bits_of_the_sums_written_out(shape):
+    """``to_local`` and ``to_world`` sum each coordinate in the order the
+    instanced search does, without a temporary a partial sum: the same bits
+    as the expressions, NaN, inf, subnormal and huge coordinates included."""
+    rng = np.random.default_rng(8)
+    T = _pose(9, spread=1e3)
+    points = rng.normal(size=shape) * 10.0 ** rng.integers(-310, 300, size=shape)
+    points.reshape(-1)[::17] = np.nan
+    points.reshape(-1)[::23] = -np.inf
+    for move, inverse in [(to_local, True), (to_world, False)]:
+        got, want = move(points, T[:3, :3], T[:3, 3]), _summed(points, T[:3, :3], T[:3, 3], inverse)
+        assert got.shape == want.shape and got.dtype == want.dtype
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+@pytest.mark.parametrize("move", [to_local, to_world])
+def test_points_move_with_two_temporaries_of_one_coordinate(move):
+    """NumPy's peak allocations moving a million points: the moved points (24
+    bytes a point) and two arrays of one coordinate (16), where the
+    expressions' partial sums, ``P - t`` and the columns stacked took 72."""
+    T = _pose(14)
+    points = np.random.default_rng(15).normal(size=(1_000_000, 3))
+    tracemalloc.start()
+    try:
+        move(points, T[:3, :3], T[:3, 3])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= 40 * len(points) + 4096, peak / len(points)
 
 
 def test_a_posed_mesh_is_within_the_robust_bound_of_the_mesh_built_moved():

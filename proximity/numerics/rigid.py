@@ -21,20 +21,44 @@ RIGID_TOLERANCE = 1e-9
 
 def to_local(points, rotation, translation):
     """``R^T (P - t)`` of ``(..., 3)`` points, summed in a fixed order (as the
-    instanced search computes it, so that both give the same bits)."""
-    d = points - translation
-    x = d[..., 0] * rotation[0, 0] + d[..., 1] * rotation[1, 0] + d[..., 2] * rotation[2, 0]
-    y = d[..., 0] * rotation[0, 1] + d[..., 1] * rotation[1, 1] + d[..., 2] * rotation[2, 1]
-    z = d[..., 0] * rotation[0, 2] + d[..., 1] * rotation[1, 2] + d[..., 2] * rotation[2, 2]
-    return np.stack([x, y, z], axis=-1)
+    instanced search computes it, so that both give the same bits):
+    ``x = d0 r00 + d1 r10 + d2 r20`` with ``d = P - t``, left to right.
+
+    Each coordinate of ``d`` adds its terms to every output column in turn,
+    so that a batch costs its output and two arrays of one coordinate, not
+    a copy of every partial sum.
+    """
+    points = np.asarray(points)
+    out = np.empty(np.broadcast_shapes(points.shape, np.shape(translation)))
+    d = np.empty(out.shape[:-1])
+    term = np.empty(out.shape[:-1])
+    for k in range(3):
+        np.subtract(points[..., k], translation[..., k], out=d)
+        for c in range(3):
+            if k == 0:
+                np.multiply(d, rotation[k, c], out=out[..., c])
+            else:
+                np.multiply(d, rotation[k, c], out=term)
+                out[..., c] += term
+    return out
 
 
 def to_world(points, rotation, translation):
-    """``R X + t`` of ``(..., 3)`` points, summed in a fixed order."""
-    x = points[..., 0] * rotation[0, 0] + points[..., 1] * rotation[0, 1] + points[..., 2] * rotation[0, 2]
-    y = points[..., 0] * rotation[1, 0] + points[..., 1] * rotation[1, 1] + points[..., 2] * rotation[1, 2]
-    z = points[..., 0] * rotation[2, 0] + points[..., 1] * rotation[2, 1] + points[..., 2] * rotation[2, 2]
-    return np.stack([x, y, z], axis=-1) + translation
+    """``R X + t`` of ``(..., 3)`` points, summed in a fixed order:
+    ``x = (x0 r00 + x1 r01 + x2 r02) + t0``, left to right, with the
+    temporaries of :func:`to_local`."""
+    points = np.asarray(points)
+    out = np.empty(np.broadcast_shapes(points.shape, np.shape(translation)))
+    term = np.empty(out.shape[:-1])
+    for k in range(3):
+        for c in range(3):
+            if k == 0:
+                np.multiply(points[..., k], rotation[c, k], out=out[..., c])
+            else:
+                np.multiply(points[..., k], rotation[c, k], out=term)
+                out[..., c] += term
+    out += translation
+    return out
 
 
 def rigid(transform, name="transform"):
