@@ -28,8 +28,8 @@ def to_local(points, rotation, translation):
     so that a batch costs its output and two arrays of one coordinate, not
     a copy of every partial sum.
     """
-    points = np.asarray(points)
-    out = np.empty(np.broadcast_shapes(points.shape, np.shape(translation)))
+    points, translation = np.asarray(points), np.asarray(translation)
+    out = np.empty(np.broadcast_shapes(points.shape, translation.shape))
     d = np.empty(out.shape[:-1])
     term = np.empty(out.shape[:-1])
     for k in range(3):
@@ -45,10 +45,10 @@ def to_local(points, rotation, translation):
 
 def to_world(points, rotation, translation):
     """``R X + t`` of ``(..., 3)`` points, summed in a fixed order:
-    ``x = (x0 r00 + x1 r01 + x2 r02) + t0``, left to right, with the
-    temporaries of :func:`to_local`."""
-    points = np.asarray(points)
-    out = np.empty(np.broadcast_shapes(points.shape, np.shape(translation)))
+    ``x = (x0 r00 + x1 r01 + x2 r02) + t0``, left to right, as
+    :func:`to_local` sums, with one array of one coordinate as scratch."""
+    points, translation = np.asarray(points), np.asarray(translation)
+    out = np.empty(np.broadcast_shapes(points.shape, translation.shape))
     term = np.empty(out.shape[:-1])
     for k in range(3):
         for c in range(3):
