@@ -11,6 +11,7 @@ from proximity import broadphase
 from proximity.broadphase.refit import REFIT_SUBTREE
 from proximity.numerics.rigid import to_local, to_world
 from proximity.results import asdict
+from proximity.shapes import posed as posed_module
 from proximity.testing import exact, examples
 from proximity.testing.meshes import icosphere, near_points, soup, torus
 
@@ -111,6 +112,63 @@ def test_points_move_with_two_temporaries_of_one_coordinate(move):
     finally:
         tracemalloc.stop()
     assert peak <= 40 * len(points) + 4096, peak / len(points)
+
+
+def _answers(shape, points):
+    """Every answer of ``shape`` at ``points``: its queries' arrays and the result's fields and normals."""
+    r = shape.closest_point(points)
+    out = {f"closest_point.{name}": np.asarray(value) for name, value in asdict(r).items()}
+    out["normal"] = np.asarray(r.normal)
+    out["distance"] = shape.distance(points)
+    out["far"] = shape.distance(points, max_distance=0.5)
+    if hasattr(shape.shape, "signed_distance"):
+        out["signed_distance"] = shape.signed_distance(points)
+    if hasattr(shape.shape, "contains"):
+        out["contains"] = shape.contains(points)
+    return out
+
+
+@pytest.mark.parametrize("name", ["mesh", "scene", "capsule", "one triangle", "rounded mesh"])
+def test_a_posed_shape_answers_a_large_batch_a_part_at_a_time_as_all_at_once(name, monkeypatch):
+    """A posed shape without a batch of its own moves and asks a large batch
+    ``CHUNK`` points at a time (here lowered; the parts sorted or not as the
+    whole is): every answer, flag and normal is the one the whole batch asked
+    at once gives, bit for bit, of the batch's shape."""
+    make = {
+        "one triangle": lambda: proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+        "rounded mesh": lambda: proximity.TriangleMesh(*torus(16, 8)).inflated(0.1),
+    }.get(name, SHAPES.get(name))
+    posed = make().transformed(_pose(10))
+    points = np.random.default_rng(11).normal(size=(50, 200, 3)) * 2 + _pose(10)[:3, 3]
+    whole = _answers(posed, points)
+    monkeypatch.setattr(posed_module, "CHUNK", 4500)  # parts of 4500, 4500 and 1000 points
+    parts = _answers(posed, points)
+    assert whole.keys() == parts.keys()
+    for key, value in whole.items():
+        part = parts[key]
+        assert part.shape == value.shape == points.shape[:-1] + value.shape[2:], key
+        assert part.dtype == value.dtype and part.flags.writeable == value.flags.writeable, key
+        np.testing.assert_array_equal(part, value, err_msg=key)
+
+
+@pytest.mark.parametrize("query, most", [("distance", 24), ("closest_point", 100)])
+def test_a_posed_mesh_asks_a_large_batch_with_little_memory_beyond_its_answers(query, most, monkeypatch):
+    """The peak of NumPy's allocations in a posed mesh's query of a million
+    points, per point: the answers (8 and 74 bytes), and the moved part and
+    its query's scratch, of ``CHUNK`` points (here 2^17: 8 bytes a point of
+    the batch).  The whole batch was moved at once, through temporaries of
+    every partial sum, before the mesh was asked."""
+    monkeypatch.setattr(posed_module, "CHUNK", 1 << 17)
+    posed = proximity.TriangleMesh(*icosphere(4)).transformed(_pose(12, spread=0.1))
+    points = np.random.default_rng(13).uniform(-1.2, 1.2, (1_000_000, 3))
+    getattr(posed, query)(points[:10_000])  # compiled, the tree's bounds made
+    tracemalloc.start()
+    try:
+        getattr(posed, query)(points)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= most * len(points), peak / len(points)
 
 
 def test_a_posed_mesh_is_within_the_robust_bound_of_the_mesh_built_moved():

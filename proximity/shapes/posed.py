@@ -4,8 +4,11 @@
 the vertices, no new hierarchy.  A query moves its points into the shape's
 own frame, ``R^T (P - t)``, asks the shape, and moves the closest points
 (and normals) back, ``R X + t``; distances, features and parameters are
-the shape's.  A scene of posed views of one mesh shares the mesh's
-hierarchy (instancing, :class:`proximity.Scene`).
+the shape's.  A shape without a batch of its own answers each point on its
+own, and a large batch is moved and asked :data:`CHUNK` points at a time,
+so that the moved copy costs a part's memory, not the batch's.  A scene of
+posed views of one mesh shares the mesh's hierarchy (instancing,
+:class:`proximity.Scene`).
 
 Accuracy.  The transform ``T = [[R, t], [0, 1]]`` is rigid when ``R`` is
 orthonormal with determinant +1; it is accepted when ``max |R^T R - I|``,
@@ -22,6 +25,7 @@ vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -38,6 +42,12 @@ if TYPE_CHECKING:
     from .rounded import Inflated
 
 __all__ = ["RIGID_TOLERANCE", "Posed", "rigid"]
+
+#: Points moved into the shape's frame and asked at a time, where each point's
+#: answer is its own (a shape without a batch of its own): the moved copy of a
+#: large batch then costs 24 MiB rather than 24 bytes a point, and so does the
+#: scratch of the shape's query.
+CHUNK = 1 << 20
 
 
 class Posed(Frozen):
@@ -122,12 +132,41 @@ class Posed(Frozen):
         """The points within ``radius`` of the posed shape (:class:`proximity.Inflated`)."""
         return VIEWS["rounded"](self, radius)
 
-    def _local(self, points):
-        """The points in the shape's frame: ``R^T (P - t)``, as ``(P - t) R``."""
+    def _points(self, points):
+        """``points`` as float64 of shape ``(..., 3)``, or a ValueError naming them."""
         p = as_float64(points, "points", "(..., 3)")
         if p.ndim == 0 or p.shape[-1] != 3:
             raise ValueError(f"points must have shape (..., 3); got shape {p.shape}")
-        return p, to_local(p, self.rotation, self.translation)
+        return p
+
+    def _each(self, p, answer):
+        """``answer(local)``, a dict of arrays, for the points ``p`` moved to the
+        shape's frame (``R^T (P - t)``, as ``(P - t) R``).
+
+        Where the shape has no batch of its own, a batch of more than
+        :data:`CHUNK` points is moved and answered :data:`CHUNK` points at a
+        time (each point's answer is its own, whatever else is asked with
+        it), and the answers' rows are joined into arrays of the batch,
+        read-only where a part's are.
+        """
+        batch = p.shape[:-1]
+        n = math.prod(batch)
+        if self.batch_shape != () or n <= CHUNK:
+            return answer(to_local(p, self.rotation, self.translation))
+        flat = p.reshape(-1, 3)
+        joined, frozen = {}, set()
+        for lo in range(0, n, CHUNK):
+            part = answer(to_local(flat[lo : lo + CHUNK], self.rotation, self.translation))
+            for name, value in part.items():
+                value = np.asarray(value)
+                if name not in joined:
+                    joined[name] = np.empty((n,) + value.shape[1:], value.dtype)
+                joined[name][lo : lo + len(value)] = value
+                if not value.flags.writeable:
+                    frozen.add(name)
+            part = value = None  # its arrays freed before the next part is asked
+        out = {name: value.reshape(batch + value.shape[1:]) for name, value in joined.items()}
+        return {name: freeze_result(value) if name in frozen else value for name, value in out.items()}
 
     def distance(
         self,
@@ -139,7 +178,11 @@ class Posed(Frozen):
         """Distance from each point to the posed shape; see :func:`proximity.distance`."""
         if args:
             raise keyword_only(self, "distance", args)
-        return self.shape.distance(self._local(points)[1], method=method, max_distance=max_distance)
+
+        def answer(local):
+            return {"distance": self.shape.distance(local, method=method, max_distance=max_distance)}
+
+        return self._each(self._points(points), answer)["distance"]
 
     def signed_distance(
         self,
@@ -152,16 +195,23 @@ class Posed(Frozen):
         """The shape's signed distance at the moved points (meshes, scenes and rounded shapes)."""
         if args:
             raise keyword_only(self, "signed_distance", args)
-        local = self._local(points)[1]
         if max_distance is not None:
             options["max_distance"] = max_distance
-        return self.shape.signed_distance(local, method=method, **options)
+
+        def answer(local):
+            return {"distance": self.shape.signed_distance(local, method=method, **options)}
+
+        return self._each(self._points(points), answer)["distance"]
 
     def contains(self, points: ArrayLike, *args: object, **options: Any) -> Bools:
         """Whether each point is in the posed shape (meshes and rounded shapes)."""
         if args:
             raise keyword_only(self, "contains", args)
-        return self.shape.contains(self._local(points)[1], **options)
+
+        def answer(local):
+            return {"inside": self.shape.contains(local, **options)}
+
+        return self._each(self._points(points), answer)["inside"]
 
     def closest_point(
         self,
@@ -177,16 +227,26 @@ class Posed(Frozen):
         """
         if args:
             raise keyword_only(self, "closest_point", args)
-        p, local = self._local(points)
-        core = self.shape.closest_point(local, method=method, max_distance=max_distance)
-        fields = asdict(core)
-        fields["point"] = to_world(np.asarray(core.point), self.rotation, self.translation)
-        result = type(core)(**fields)
-        if "_normal" in core.__dict__:
-            result.__dict__["_normal"] = freeze_result(np.asarray(core.normal) @ self.rotation.T)
+        p = self._points(points)
+        made = {}  # the shape's result type, and the batch members its rows asked
+
+        def answer(local):
+            core = self.shape.closest_point(local, method=method, max_distance=max_distance)
+            made.update(type=type(core), members=core.__dict__.get("_query", (None, None, None))[1])
+            fields = asdict(core)
+            fields["point"] = to_world(np.asarray(core.point), self.rotation, self.translation)
+            if "_normal" in core.__dict__:
+                fields["_normal"] = np.asarray(core.normal)  # rotated below, once
+            return fields
+
+        fields = self._each(p, answer)
+        normal = fields.pop("_normal", None)
+        result = made["type"](**fields)
+        if normal is not None:
+            # One product over the whole batch: its bits (a BLAS kernel's) may depend on its size.
+            result.__dict__["_normal"] = freeze_result(normal @ self.rotation.T)
         else:
-            members = core.__dict__.get("_query", (None, None, None))[1]
-            attach(result, p, members, self)
+            attach(result, p, made["members"], self)
         return result
 
     def _surface_normals(self, result, rows, members):
