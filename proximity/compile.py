@@ -66,8 +66,10 @@ def _jobs(method):
 
 
 def _broad_phase():
-    """The hierarchy's build, refits and candidate search, on a small mesh."""
+    """The hierarchy's build, refits, candidate search and the visiting order of large batches,
+    on a small mesh."""
     from .broadphase import _alloc, build, refit, traverse
+    from .broadphase.nearest import _morton_order
 
     rng = np.random.default_rng(0)
     width = primitives.N_PARAMS
@@ -86,6 +88,7 @@ def _broad_phase():
     built = build.build_faces(vertices, faces[:2], 0)
     refit.refit_faces(vertices, faces[:2], built.index, built.child, built.count, built.kinds)
     points = readonly(rng.random((2, 3)), np.float64)
+    _morton_order(points)
     bounds, cull, magnitude = tree.boxes(False)
     out = np.empty(len(kinds), np.int64)
     traverse._gather(cull, bounds, tree.child, tree.count, tree.depth, magnitude, points[0], 1.0, out)

@@ -137,8 +137,9 @@ shapes[1].with_vertices(vertices[:20] * 1.5)
 def test_a_new_process_loads_what_compile_all_compiled(tmp_path):
     """What ``python -m proximity.compile`` leaves in the cache is what the
     queries load: the kernels it compiles by hand (the hierarchy's build and
-    search, the gathers of large meshes, the disks' unit normals, the
-    winding number) have the argument types the queries give them.  (The
+    search, the gathers of large meshes, the visiting order of large
+    batches, the disks' unit normals, the winding number) have the argument
+    types the queries give them.  (The
     methods' kernels have fixed signatures; they are left out, to keep the
     test short.)"""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
@@ -152,7 +153,7 @@ def test_a_new_process_loads_what_compile_all_compiled(tmp_path):
     # A specialised kernel is named after its function, its tag and a stamp of the sources.
     names = {name.split("__")[0] for name in ahead}
     expected = {"_build_step", "_face_step", "_fit_step", "_fit_indexed", "_gather_faces", "_empty"}
-    expected |= {"_take_rows"}
+    expected |= {"_take_rows", "_morton"}
     assert expected | {"round_frames"} <= names
     assert not compiled(_QUERIES) & ahead
 
