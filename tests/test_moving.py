@@ -171,6 +171,29 @@ def test_a_posed_mesh_asks_a_large_batch_with_little_memory_beyond_its_answers(q
     assert peak <= most * len(points), peak / len(points)
 
 
+def test_the_normal_on_a_posed_mesh_is_the_meshs_at_the_moved_point():
+    """Where a point is on the posed mesh (distance 0), its normal is the
+    mesh's at the point the query moved, rotated: the face's side, not the
+    direction of a rounding.  It was the mesh's at the point moved again by
+    BLAS's product, whose rounding differs from the query's sums: a third of
+    these points were then off the surface by an ulp, their normals the
+    direction of that ulp (some pointing inwards)."""
+    mesh = proximity.TriangleMesh(*icosphere(2))
+    rng = np.random.default_rng(16)
+    on = 0
+    for seed in range(20):
+        T = _pose(seed, spread=1.0)
+        posed = mesh.transformed(T)
+        world = np.asarray(posed.closest_point(rng.normal(size=(500, 3)) * 2 + T[:3, 3]).point)
+        r = posed.closest_point(world)
+        rows = np.asarray(r.distance) == 0
+        moved = to_local(world[rows], T[:3, :3], T[:3, 3])
+        want = np.asarray(mesh.closest_point(moved).normal) @ T[:3, :3].T
+        np.testing.assert_allclose(np.asarray(r.normal)[rows], want, rtol=0, atol=1e-15, err_msg=seed)
+        on += rows.sum()
+    assert on >= 20
+
+
 def test_a_posed_mesh_is_within_the_robust_bound_of_the_mesh_built_moved():
     vertices, faces = torus(24, 12)
     T = _pose(3, spread=100.0)

@@ -252,7 +252,8 @@ class Posed(Frozen):
     def _surface_normals(self, result, rows, members):
         """The shape's normals at rows ``rows`` (on it), rotated to the world."""
         points = np.broadcast_to(np.asarray(result.__dict__["_query"][0]), np.shape(result.point))
-        local = (points.reshape(-1, 3)[rows] - self.translation) @ self.rotation
+        # Moved with the query's bits: a point moved otherwise may round off the surface.
+        local = to_local(points.reshape(-1, 3)[rows], self.rotation, self.translation)
         shape = self.shape if members is None else self.shape[members]
         normal = np.asarray(shape.closest_point(local).normal).reshape(-1, 3)
         return normal @ self.rotation.T
