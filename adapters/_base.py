@@ -566,10 +566,11 @@ class Backend:
         ------
         ValueError
             Where proximity refuses the pair (different dimensions, batches
-            that do not broadcast), naming both arguments; for 2D shapes.
+            that do not broadcast), naming both arguments.
         NotImplementedError
             For a kind of shape, or a pair of kinds, the backend cannot
-            give its library, naming the argument or both.
+            give its library (2D shapes among them), naming the argument or
+            both.
 
         Examples
         --------
@@ -608,6 +609,17 @@ class Backend:
         BackendResult
             proximity's result type in ``.result``, with a failure code,
             a documented tolerance per row and a description of the model.
+
+        Raises
+        ------
+        TypeError
+            If ``shape`` is not a proximity shape.
+        ValueError
+            Where proximity refuses the points (naming ``points``).
+        NotImplementedError
+            For a proximity shape the backend cannot give its library
+            (rounded or posed shapes, scenes, and kinds not in its
+            ``primitives``), naming it.
         """
         if not isinstance(shape, proximity.Shape):
             raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
@@ -730,7 +742,11 @@ def _flatten_shape(shape):
         return "mesh", {"vertices": shape.vertices, "faces": shape.faces}, shape
     primitive = getattr(shape, "_primitive", None)
     if primitive is None:
-        raise TypeError(f"backends answer for primitive batches and TriangleMesh; got {type(shape).__name__}")
+        # A proximity shape all the same (rounded, posed, a scene): the libraries have no model of it.
+        raise NotImplementedError(
+            f"shape is a {type(shape).__name__}: the backends' point queries take triangles, disks, "
+            "circles and meshes"
+        )
     data, embedded = {}, []
     for name, core in shape._fields:
         array = np.asarray(getattr(shape, name))

@@ -179,7 +179,10 @@ def _unwrap(shape, name):
     if not isinstance(core, proximity.Shape):
         raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
     if core.dim != 3:
-        raise ValueError(f"{name} must be a 3D shape for the backends' pair queries; got a {core.dim}D one")
+        # proximity answers 2D pairs; the libraries are 3D only.
+        raise NotImplementedError(
+            f"{name} is a {core.dim}D shape: the backends' pair queries take 3D shapes only"
+        )
     return core, radius, rotation, translation, posed
 
 

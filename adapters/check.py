@@ -157,7 +157,9 @@ def main(argv=None):
             backend.close()
     print("## verdict")
     for backend in backends:
-        print(verdict(backend.name, [r.summary(backend.name) for r in reports]))
+        summaries = [s for r in reports for s in r.summaries if s.backend == backend.name]
+        left_out = sum(x.backend == backend.name for r in reports for x in r.left_out)
+        print(verdict(backend.name, summaries, left_out))
     print()
     print(
         f"{len(backends)} backends, seed {args.seed}, {args.n} rows per group, "
@@ -179,8 +181,9 @@ Each table compares every backend with proximity's most accurate method on one g
 """
 
 
-def verdict(name, summaries):
-    """One line on a backend over every group: within its tolerance or not, and what it left unanswered."""
+def verdict(name, summaries, left_out=0):
+    """One line on a backend over every group: within its tolerance or not, what it left
+    unanswered, and of how many groups it was left out (it could not be given their queries)."""
     rows = sum(s.rows for s in summaries)
     answered = sum(s.answered for s in summaries)
     beyond = sum(s.beyond_tolerance for s in summaries)
@@ -194,8 +197,12 @@ def verdict(name, summaries):
         head = f"{name}: within its documented tolerance on all {answered} answered rows"
     if failures:
         listed = ", ".join(f"{reason} {count}" for reason, count in sorted(failures.items()))
-        return f"{head}; {rows - answered} of {rows} rows not answered ({listed})"
-    return f"{head}; every one of {rows} rows answered"
+        line = f"{head}; {rows - answered} of {rows} rows not answered ({listed})"
+    else:
+        line = f"{head}; every one of {rows} rows answered"
+    if left_out:
+        line += f"; left out of {left_out} group{'s' if left_out > 1 else ''} (see each table)"
+    return line
 
 
 if __name__ == "__main__":

@@ -3,6 +3,9 @@
 The reference is proximity's most accurate method.  A backend's disagreement
 on a row is ``|d_backend - d_reference|``, over the rows it answered; rows it
 could not answer are counted by :class:`~proximity.adapters.Failure` reason instead.
+A backend that cannot be given the query at all (a kind of shape, or a pair
+of kinds, its library has no model of) is left out, with its reason
+(:class:`LeftOut`).
 """
 
 import types
@@ -92,6 +95,33 @@ class Case:
     ratio: float
 
 
+@dataclass(frozen=True)
+class LeftOut:
+    """A backend that could not be given the query, and why.
+
+    Examples
+    --------
+    trimesh's pair queries take triangles and meshes only:
+
+    >>> import proximity, proximity.adapters as adapters
+    >>> from proximity.testing.meshes import icosphere
+    >>> ball = proximity.TriangleMesh(*icosphere(1, 1.0))
+    >>> report = adapters.cross_check(proximity.Point([3, 0, 0]), ball, backends=["fcl", "trimesh"])
+    >>> [s.backend for s in report.summaries], [x.backend for x in report.left_out]
+    (['fcl'], ['trimesh'])
+    >>> print(report)  # doctest: +ELLIPSIS
+    Point of batch shape () and TriangleMesh of 80 primitives against proximity certified
+    backend  model ...
+    fcl      a: Sphere(0); b: BVHModel(F triangles) ...
+    <BLANKLINE>
+    left out, as they cannot be given this query:
+      trimesh: the trimesh backend has no pair query for a point (a) and a mesh (b); it takes triangle, mesh
+    """
+
+    backend: str
+    reason: str
+
+
 @dataclass(frozen=True, repr=False)
 class CrossCheck:
     """The result of :func:`cross_check`.
@@ -103,10 +133,13 @@ class CrossCheck:
     reference : str
         The proximity method used as reference.
     summaries : tuple of Summary
-        One per backend, in the order asked.
+        One per backend that answered, in the order asked.
     worst : tuple of Case
         For each backend, its answered rows with the largest
         disagreement-to-tolerance ratio, largest first.
+    left_out : tuple of LeftOut
+        The backends that could not be given the query, in the order asked,
+        each with its reason.
 
     Examples
     --------
@@ -114,8 +147,8 @@ class CrossCheck:
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
-    >>> report.reference, [s.backend for s in report.summaries], len(report.worst)
-    ('certified', ['trimesh'], 3)
+    >>> report.reference, [s.backend for s in report.summaries], len(report.worst), report.left_out
+    ('certified', ['trimesh'], 3, ())
     >>> print(report.table().splitlines()[0])
     Circle of batch shape () against proximity certified
     """
@@ -124,12 +157,23 @@ class CrossCheck:
     reference: str
     summaries: tuple
     worst: tuple
+    left_out: tuple = ()
 
     def summary(self, backend):
-        """The :class:`Summary` of the backend named ``backend``."""
+        """The :class:`Summary` of the backend named ``backend``.
+
+        Raises
+        ------
+        KeyError
+            If that backend was not asked, or was left out (the message
+            gives its reason).
+        """
         for s in self.summaries:
             if s.backend == backend:
                 return s
+        for x in self.left_out:
+            if x.backend == backend:
+                raise KeyError(f"backend {backend!r} was left out of this cross-check: {x.reason}")
         raise KeyError(
             f"no backend {backend!r} in this cross-check; have {[s.backend for s in self.summaries]}"
         )
@@ -140,7 +184,7 @@ class CrossCheck:
     __repr__ = __str__
 
     def table(self):
-        """The summaries and the worst cases as a plain-text table (what ``print`` shows)."""
+        """The summaries, the worst cases and the backends left out, as plain text (what ``print`` shows)."""
         rows = [
             ("backend", "model", "answered", "max |dd|/S", "median |dd|/S", "max |dd|", ">tol", "failures")
         ]
@@ -158,7 +202,11 @@ class CrossCheck:
                     failures,
                 )
             )
-        lines = [f"{self.shape} against proximity {self.reference}", *_format(rows)]
+        lines = [f"{self.shape} against proximity {self.reference}"]
+        if self.summaries:
+            lines += _format(rows)
+        else:
+            lines.append("no backend answered")
         if self.worst:
             cases = [("backend", "index", "distance", "reference", "|dd|", "tol", "|dd|/tol")]
             for c in self.worst:
@@ -174,6 +222,9 @@ class CrossCheck:
                     )
                 )
             lines += ["", "largest disagreements, relative to each backend's tolerance:", *_format(cases)]
+        if self.left_out:
+            lines += ["", "left out, as they cannot be given this query:"]
+            lines += [f"  {x.backend}: {x.reason}" for x in self.left_out]
         return "\n".join(lines)
 
 
@@ -182,9 +233,11 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
 
     Parameters
     ----------
-    shape : proximity.Triangle, proximity.Disk or proximity.Circle
-        One shape or a batch; for a pair query, any shape
-        :meth:`Backend.closest_points` takes.
+    shape : Shape
+        One shape or a batch: for a point query, a shape the backends'
+        :meth:`Backend.closest_point` takes (triangles, disks, circles,
+        meshes); for a pair query, any shape :meth:`Backend.closest_points`
+        takes.  A backend that takes neither is left out.
     points : array_like, shape ``(..., D)``, or Shape
         Query points, broadcast against the shape's batch; or a second
         shape: the backends' :meth:`Backend.closest_points` of the pair are
@@ -202,7 +255,17 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     Returns
     -------
     CrossCheck
-        Per-backend summaries and worst cases; ``.table()`` formats them.
+        Per-backend summaries and worst cases, and the backends left out
+        with their reasons; ``.table()`` formats them.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Where proximity refuses the query (it is validated as
+        :func:`proximity.distance` validates it).
+    NotImplementedError
+        Where proximity itself has no answer for the pair.  A backend that
+        cannot be given the query is left out, never raised.
 
     Examples
     --------
@@ -246,31 +309,46 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
                 owned.append(instance)
                 instances.append(instance)
         pair = isinstance(points, proximity.Shape)
+        # proximity validates the query (and raises where it has no answer) before any backend is asked.
         if pair:
             methods = set(shape.methods) & set(points.methods)
             method = "certified" if "certified" in methods else "robust"
             reference = np.asarray(proximity.distance(shape, points, method=method), dtype=np.float64)
-            scale = np.asarray(pair_scale(shape, points), dtype=np.float64)
-            point_rows = np.zeros(reference.shape + (0,))
         else:
             method = best_method(shape)
             reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
-            scale = np.asarray(error_scale(shape, points), dtype=np.float64)
-            point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
-        summaries, cases = [], []
+        answers, left_out = [], []
         for backend in instances:
-            if pair:
-                r = backend.closest_points(shape, points)
-            else:
-                r = backend.closest_point(shape, points, tol=tol)
-            summary, worst_cases = _summarise(backend.name, r, reference, scale, point_rows, worst)
-            summaries.append(summary)
-            cases.extend(worst_cases)
+            try:
+                if pair:
+                    answers.append(backend.closest_points(shape, points))
+                else:
+                    answers.append(backend.closest_point(shape, points, tol=tol))
+            except NotImplementedError as exc:  # the library has no model of the query
+                left_out.append(LeftOut(backend=backend.name, reason=str(exc)))
     finally:
         for instance in owned:
             instance.close()
+    summaries, cases = [], []
+    if answers:  # the scales are those of shapes some backend takes
+        if pair:
+            scale = np.asarray(pair_scale(shape, points), dtype=np.float64)
+            point_rows = np.zeros(reference.shape + (0,))
+        else:
+            scale = np.asarray(error_scale(shape, points), dtype=np.float64)
+            point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
+        for r in answers:
+            summary, worst_cases = _summarise(r.backend, r, reference, scale, point_rows, worst)
+            summaries.append(summary)
+            cases.extend(worst_cases)
     described = f"{_describe(shape)} and {_describe(points)}" if pair else _describe(shape)
-    return CrossCheck(shape=described, reference=method, summaries=tuple(summaries), worst=tuple(cases))
+    return CrossCheck(
+        shape=described,
+        reference=method,
+        summaries=tuple(summaries),
+        worst=tuple(cases),
+        left_out=tuple(left_out),
+    )
 
 
 def _describe(shape):

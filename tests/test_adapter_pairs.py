@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import Capsule, Disk, Segment, Sphere, Triangle, TriangleMesh, adapters
+from proximity import Capsule, Disk, Point, Segment, Sphere, Triangle, TriangleMesh, adapters
 from proximity.adapters import Failure
 from proximity.adapters._pairs import segment_frames
 from proximity.testing import exact
@@ -390,7 +390,7 @@ def test_bad_input_names_the_arguments(backends):
         fcl.closest_points(tri.inflated(0.1), tri)
     with pytest.raises(NotImplementedError, match=r"capsule \(a\) and a triangle \(b\)"):
         backends["trimesh"].closest_points(Capsule([[0, 0, 0], [1, 0, 0]], 0.1), tri)
-    with pytest.raises(ValueError, match="3D"):
+    with pytest.raises(NotImplementedError, match="a is a 2D shape.*3D shapes only"):
         fcl.closest_points(Triangle([[0, 0], [1, 0], [0, 1]]), Triangle([[0, 2], [1, 2], [0, 3]]))
     with pytest.raises(TypeError, match="b must be a proximity shape"):
         fcl.closest_points(tri, "a triangle")
@@ -419,6 +419,42 @@ def test_trimesh_on_the_callers_coordinates_is_wrong_on_small_pairs_and_cross_ch
     assert report.summary("trimesh").beyond_tolerance == 0
     s = report.summary("trimesh[raw]")
     assert s.beyond_tolerance > 0 and s.max_relative > 1e-4
+
+
+def test_cross_check_leaves_out_a_backend_that_cannot_be_given_the_pair():
+    ball = TriangleMesh(*icosphere(1, 1.0))
+    point, capsule = Point([[3.0, 0, 0], [0, 2.5, 0]]), Capsule([[3, 0, 0], [4, 0, 0]], 0.2)
+    for a, kind in ((point, "point"), (capsule, "capsule")):
+        report = adapters.cross_check(a, ball)  # every backend; trimesh's pairs are of triangles and meshes
+        assert [s.backend for s in report.summaries] == ["fcl", "pybullet"]
+        for s in report.summaries:
+            assert s.answered == s.rows and s.beyond_tolerance == 0
+        (left,) = report.left_out
+        assert left.backend == "trimesh"
+        assert f"no pair query for a {kind} (a) and a mesh (b)" in left.reason
+        table = report.table()
+        assert "left out" in table and f"trimesh: {left.reason}" in table
+        left_out = r"backend .trimesh. was left out of this cross-check: .*no pair query"
+        with pytest.raises(KeyError, match=left_out):
+            report.summary("trimesh")
+
+
+def test_cross_check_of_a_query_no_backend_takes_leaves_every_one_out_and_proximity_still_validates():
+    # proximity answers 2D pairs
+    flat = Triangle([[0, 0], [1, 0], [0, 1]]), Triangle([[0, 2], [1, 2], [0, 3]])
+    sphere = Sphere([0, 0, 0], 0.5), [[1.0, 0, 0]]  # no backend models a sphere for point queries
+    for query, why in ((flat, "a is a 2D shape"), (sphere, "shape is a Sphere")):
+        report = adapters.cross_check(*query)
+        assert report.summaries == () and report.worst == ()
+        assert [x.backend for x in report.left_out] == list(adapters.NAMES)
+        assert all(x.reason.startswith(why) for x in report.left_out)
+        assert "no backend answered" in str(report)
+    # What proximity refuses, or cannot answer, is still raised.
+    tri = Triangle(np.zeros((3, 3, 3)) + [[0, 0, 1], [1, 0, 1], [0, 1, 1]])
+    with pytest.raises(ValueError, match=r"\ba\b.*\bb\b"):
+        adapters.cross_check(Segment(np.zeros((2, 2, 3)) + [[0, 0, 0], [1, 0, 0]]), tri)
+    with pytest.raises(NotImplementedError, match=r"disk \(a\) and a triangle \(b\)"):
+        adapters.cross_check(Disk([0, 0, 0], [0, 0, 1], 1.0), tri)
 
 
 @pytest.mark.parametrize("module", ["proximity.adapters._base", "proximity.adapters.crosscheck"])
