@@ -4,9 +4,10 @@ Run ``python -m proximity.adapters.check`` for the default scene, or
 ``python -m proximity.adapters.check --help`` for the options.  The scene has groups
 of well-conditioned triangles, disks and circles, and groups built to show
 each library's known failure modes: degenerate and sub-millimetre
-triangles, points on a triangle's face, points in a disk's plane.  trimesh is
-asked twice: as the backend uses it (rescaled rows) and on the caller's
-coordinates (``trimesh[raw]``).
+triangles, points on a triangle's face, points in a disk's plane.  The
+libraries are asked in the caller's coordinates (the backends named
+``<name>[raw]``); ``--frames rescaled`` asks them in the backends' frames of
+each query's own instead, and ``--frames both`` asks each library both ways.
 """
 
 import argparse
@@ -21,7 +22,8 @@ from . import NAMES, available, get
 from ._base import INSTALL_HINT
 from .crosscheck import cross_check
 
-RAW_TRIMESH = "trimesh-raw"
+#: ``--frames``: the values of ``rescale`` each library is asked with.
+FRAMES = {"caller": (False,), "rescaled": (True,), "both": (False, True)}
 
 
 def _rotation(rng, n):
@@ -122,27 +124,28 @@ def main(argv=None):
     parser.add_argument(
         "--backend",
         action="append",
-        choices=(*NAMES, RAW_TRIMESH),
+        choices=NAMES,
         default=None,
-        help="backend to ask; repeat for several (default: every installed one, "
-        f"plus {RAW_TRIMESH} when trimesh is installed)",
+        help="backend to ask; repeat for several (default: every installed one)",
+    )
+    parser.add_argument(
+        "--frames",
+        choices=tuple(FRAMES),
+        default="caller",
+        help="where the libraries are asked: in the caller's coordinates (default; backends named "
+        "<name>[raw]), in the backends' rescaled frames of each query's own, or both",
     )
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error("-n must be at least 1")
 
-    if args.backend is None:
-        names = available()
-        if "trimesh" in names:
-            names.append(RAW_TRIMESH)
-    else:
-        names = list(dict.fromkeys(args.backend))
+    names = available() if args.backend is None else list(dict.fromkeys(args.backend))
     if not names:
         print(f"no backend library is installed: {INSTALL_HINT}", file=sys.stderr)
         return 1
 
     start = time.perf_counter()
-    backends = [get("trimesh", rescale=False) if name == RAW_TRIMESH else get(name) for name in names]
+    backends = [get(name, rescale=rescale) for name in names for rescale in FRAMES[args.frames]]
     print(LEGEND)
     reports = []
     try:

@@ -6,6 +6,11 @@ could not answer are counted by :class:`~proximity.adapters.Failure` reason inst
 A backend that cannot be given the query at all (a kind of shape, or a pair
 of kinds, its library has no model of) is left out, with its reason
 (:class:`LeftOut`).
+
+The libraries are asked in the caller's coordinates, as they would be used
+directly, unless ``rescale=True`` asks them in the backends' frames of each
+query's own (see :class:`~proximity.adapters._base.Backend`), where
+libraries with absolute tolerances answer as they do at a unit size.
 """
 
 import types
@@ -50,7 +55,7 @@ class Summary:
     >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
-    >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh")
+    >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh[raw]")
     >>> s.rows, s.answered, dict(s.failures), s.max_relative < 1e-3
     (20, 20, {}, True)
     """
@@ -81,7 +86,7 @@ class Case:
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> case = adapters.cross_check(circle, points, backends=["trimesh"], worst=1).worst[0]
     >>> case.backend, bool(case.disagreement == abs(case.distance - case.reference)), case.ratio < 1
-    ('trimesh', True, True)
+    ('trimesh[raw]', True, True)
     """
 
     backend: str
@@ -108,14 +113,15 @@ class LeftOut:
     >>> ball = proximity.TriangleMesh(*icosphere(1, 1.0))
     >>> report = adapters.cross_check(proximity.Point([3, 0, 0]), ball, backends=["fcl", "trimesh"])
     >>> [s.backend for s in report.summaries], [x.backend for x in report.left_out]
-    (['fcl'], ['trimesh'])
+    (['fcl[raw]'], ['trimesh[raw]'])
     >>> print(report)  # doctest: +ELLIPSIS
     Point of batch shape () and TriangleMesh of 80 primitives against proximity certified
-    backend  model ...
-    fcl      a: Sphere(0); b: BVHModel(F triangles) ...
+    backend   model ...
+    fcl[raw]  a: Sphere(0); b: BVHModel(F triangles) ...
     <BLANKLINE>
     left out, as they cannot be given this query:
-      trimesh: the trimesh backend has no pair query for a point (a) and a mesh (b); it takes triangle, mesh
+      trimesh[raw]: the trimesh[raw] backend has no pair query for a point (a) and a mesh (b);
+      it takes triangle, mesh
     """
 
     backend: str
@@ -148,7 +154,7 @@ class CrossCheck:
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
     >>> report.reference, [s.backend for s in report.summaries], len(report.worst), report.left_out
-    ('certified', ['trimesh'], 3, ())
+    ('certified', ['trimesh[raw]'], 3, ())
     >>> print(report.table().splitlines()[0])
     Circle of batch shape () against proximity certified
     """
@@ -228,7 +234,7 @@ class CrossCheck:
         return "\n".join(lines)
 
 
-def cross_check(shape, points, backends=None, tol=None, *, worst=3):
+def cross_check(shape, points, backends=None, tol=None, *, worst=3, rescale=False):
     """Ask every backend and proximity the same query, and compare.
 
     Parameters
@@ -244,13 +250,21 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
         compared with :func:`proximity.distance` of the pair, as
         :func:`proximity.distance` reads its second argument.
     backends : iterable of str or Backend, optional
-        Backend names (created here and closed afterwards) or backend
-        objects (left open).  Default: every name in :func:`available`.
+        Backend names (created here, with ``rescale``, and closed
+        afterwards) or backend objects (asked as they were made, and left
+        open).  Default: every name in :func:`available`.
     tol : float, optional
         Modelling tolerance passed to each backend (see
         :meth:`Backend.closest_point`); default ``1e-3 R``.
     worst : int, optional
         How many of its largest disagreements to keep per backend.
+    rescale : bool, optional
+        Create the named backends with ``rescale=True``, which asks each
+        library in a frame of each query's own (a pair centered and scaled
+        by a power of two to a size of about 1; for trimesh and pybullet,
+        each point query's row or shape likewise).  Default False: the
+        libraries are given the caller's coordinates, as they would be used
+        directly, and the backends are named ``<name>[raw]``.
 
     Returns
     -------
@@ -273,13 +287,13 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
-    >>> s = report.summary("trimesh")
+    >>> s = report.summary("trimesh[raw]")
     >>> s.answered, s.beyond_tolerance, s.max_disagreement <= 1e-3
     (20, 0, True)
     >>> print(report)  # doctest: +ELLIPSIS
     Circle of batch shape () against proximity certified
-    backend  model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
-    trimesh  ...    20/20     ...
+    backend       model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
+    trimesh[raw]  ...    20/20     ...
 
     A pair query: 50 capsules against 50 triangles, the last 10 of them
     crossing the capsules' axes.  fcl answers those with witness points
@@ -291,9 +305,20 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     >>> around = [[2, 0, 0], [-1, 2, 0], [-1, -2, 0]]      # centroid at the origin
     >>> tri[40:] = axes[40:].mean(axis=1, keepdims=True) + around
     >>> pair = adapters.cross_check(proximity.Capsule(axes, 0.25), proximity.Triangle(tri), backends=["fcl"])
-    >>> s = pair.summary("fcl")
+    >>> s = pair.summary("fcl[raw]")
     >>> s.rows, s.answered, s.beyond_tolerance, s.failures["CONTACT"]
     (50, 50, 0, 10)
+
+    Triangle pairs of a size of 1e-4: fcl's triangle tests have absolute
+    tolerances, so that in the caller's coordinates some of its distances
+    are wrong, which it is not in a frame of the pair's own.
+
+    >>> a = proximity.Triangle(rng.normal(size=(200, 3, 3)) * 1e-4)
+    >>> b = proximity.Triangle((rng.normal(size=(200, 3, 3)) + [3, 0, 0]) * 1e-4)
+    >>> raw = adapters.cross_check(a, b, backends=["fcl"]).summary("fcl[raw]")
+    >>> rescaled = adapters.cross_check(a, b, backends=["fcl"], rescale=True).summary("fcl")
+    >>> raw.beyond_tolerance > 0, raw.max_relative > 1e-3, rescaled.beyond_tolerance
+    (True, True, 0)
     """
     from . import available, get
 
@@ -305,7 +330,7 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
             if isinstance(b, Backend):
                 instances.append(b)
             else:
-                instance = get(b)
+                instance = get(b, rescale=rescale)
                 owned.append(instance)
                 instances.append(instance)
         pair = isinstance(points, proximity.Shape)
