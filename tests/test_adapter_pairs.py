@@ -499,6 +499,31 @@ def test_backends_in_the_callers_coordinates_answer_unit_pairs_within_their_tole
             assert (r.tolerance <= rescaled.closest_points(*pair).tolerance * 4).all()
 
 
+@pytest.mark.xfail(
+    raises=TypeError,
+    strict=True,
+    reason="proximity.pair_queries._Side converts a one-element radius array with float()",
+)
+def test_one_element_radius_arrays_are_rounded_shapes_of_that_radius(backends):
+    tri = Triangle([[[3, 0, 0], [4, 0, 0], [3, 1, 0]]])
+    axis = [[[0, 0, 0], [1, 0, 0]]]
+    for a, b in (
+        (Sphere(np.zeros((1, 3)), [0.5]), Sphere(np.zeros((1, 3)), 0.5)),
+        (Capsule(axis, [0.2]), Capsule(axis, 0.2)),
+        (Segment(axis).inflated([0.2]), Segment(axis).inflated(0.2)),
+    ):
+        for name in ("fcl", "pybullet"):
+            got, expected = backends[name].closest_points(a, tri), backends[name].closest_points(b, tri)
+            assert got.failure.tolist() == expected.failure.tolist() == [Failure.OK]
+            assert got.distance.tolist() == expected.distance.tolist()
+        report = adapters.cross_check(a, tri)
+        assert [s.backend for s in report.summaries] == ["fcl[raw]", "pybullet[raw]"]
+        assert [x.backend for x in report.left_out] == ["trimesh[raw]"]
+    rounded = TriangleMesh(*icosphere(1, 1.0)).inflated([0.1])
+    report = adapters.cross_check(rounded, tri)
+    assert report.summaries == () and all("rounded TriangleMesh" in x.reason for x in report.left_out)
+
+
 @pytest.mark.parametrize("module", ["proximity.adapters._base", "proximity.adapters.crosscheck"])
 def test_pair_docstring_examples_run(module):
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.NORMALIZE_WHITESPACE)
