@@ -19,9 +19,10 @@ with zarr installed).  ``OUT`` is a ``.npy`` file or a ``.zarr`` directory:
 With ``--signed`` the distances are signed, negative inside the mesh (the
 field is then named ``signed_distance``), as
 :meth:`proximity.TriangleMesh.signed_distance` gives them; ``--sign``
-chooses how inside is told from outside: ``pseudonormal`` (the default;
-closed meshes only) or ``winding`` (any mesh, slower), and implies
-``--signed``.
+chooses how inside is told from outside, and implies ``--signed``: ``auto``
+(the default, as that method's: the pseudonormal on a mesh that bounds a
+solid, else the winding number, with a warning), ``pseudonormal`` (closed
+manifold meshes) or ``winding`` (any mesh, slower).
 
 Progress goes to stderr: a bar on a terminal, and where stderr is not one
 (a pipe, a CI log, ``nohup``) a plain line every ten seconds or so; a last
@@ -49,6 +50,7 @@ line on stderr, leaving no ``OUT.partial``.
 
 import argparse
 import errno
+import inspect
 import json
 import os
 import shutil
@@ -523,10 +525,28 @@ def _worker_peak_rss():
     return peak_rss()
 
 
+#: What each ``--sign`` does, for the help.
+SIGN_HELP = {
+    "auto": "the pseudonormal on a mesh that bounds a solid, else the winding number, with a warning",
+    "pseudonormal": "closed manifold meshes",
+    "winding": "any mesh, slower",
+}
+
+
+def default_sign():
+    """The sign of ``--signed`` without ``--sign``: ``TriangleMesh.signed_distance``'s own default."""
+    from .mesh import TriangleMesh
+
+    return inspect.signature(TriangleMesh.signed_distance).parameters["sign"].default
+
+
 def parser():
     """The command's argument parser."""
     from .mesh import SIGNS
     from .methods import REGISTRY
+
+    default = default_sign()
+    signs = "; ".join(f"{s} ({'the default: ' if s == default else ''}{SIGN_HELP[s]})" for s in SIGNS)
 
     parser = argparse.ArgumentParser(
         prog=f"python -m {NAME}",
@@ -543,8 +563,7 @@ def parser():
     parser.add_argument(
         "--sign",
         choices=SIGNS,
-        help="how inside is told from outside (implies --signed): pseudonormal (default; closed meshes) "
-        "or winding (any mesh, slower)",
+        help=f"how inside is told from outside (implies --signed): {signs}",
     )
     parser.add_argument("--closest-points", action="store_true", help="also write the closest points")
     parser.add_argument("--faces", action="store_true", help="also write the index of the nearest face")
@@ -572,14 +591,12 @@ def parser():
 
 def parse(argv):
     """The command's arguments, checked."""
-    from .mesh import SIGNS
-
     command = parser()
     args = command.parse_args(argv)
     if args.sign is not None:
         args.signed = True
     elif args.signed:
-        args.sign = SIGNS[0]
+        args.sign = default_sign()
     if args.chunk < 1:
         command.error(f"--chunk must be at least 1; got {args.chunk}")
     if args.workers is not None and args.workers < 1:

@@ -194,6 +194,24 @@ def test_signed_distances(files, tmp_path, capsys):
     assert np.load(out).tobytes() == expected.tobytes()
 
 
+def test_the_help_names_the_sign_the_command_uses_by_default(files, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        cloud.parser().parse_args(["--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    sign_help = help_text[help_text.index("--sign {") : help_text.index("--closest-points also")]
+    stated = __import__("re").findall(r"(\w+) \((?:the )?default", sign_help)
+    assert len(stated) == 1, sign_help
+    # What --signed does without --sign, as the last line says...
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--signed", "--no-progress") == 0
+    (wrote,) = [line for line in capsys.readouterr().err.splitlines() if " wrote " in line]
+    assert wrote.endswith(f"sign {stated[0]})"), wrote
+    # ...and TriangleMesh.signed_distance's own default.
+    mesh = cloud.read_mesh(files["stl"], merge=True)
+    expected = mesh.signed_distance(files["points"], sign=stated[0])
+    assert np.load(tmp_path / "d.npy").tobytes() == mesh.signed_distance(files["points"]).tobytes()
+    assert np.load(tmp_path / "d.npy").tobytes() == expected.tobytes()
+
+
 # --- Bad input ----------------------------------------------------------------------------------
 
 
