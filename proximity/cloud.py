@@ -27,7 +27,8 @@ manifold meshes) or ``winding`` (any mesh, slower).
 Progress goes to stderr: a bar on a terminal, and where stderr is not one
 (a pipe, a CI log, ``nohup``) a plain line every ten seconds or so; a last
 line sums up the job.  ``--no-progress`` leaves only that line and the
-warnings.
+warnings, each one line ``proximity.cloud: warning: ...`` (those the
+library raises, such as a mesh that does not bound a solid, among them).
 
 The job runs chunk by chunk (``--chunk`` rows at a time), so its memory is
 bounded by the chunk, not by ``N``.  By default it runs in this process, on
@@ -57,6 +58,7 @@ import shutil
 import signal
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -637,8 +639,25 @@ def _terminate(signum, frame):
     raise SystemExit(128 + signum)
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one line of the command's own, where Python would print the line of
+    proximity's source that raised it."""
+    print(f"{NAME}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+def _show_warnings_as_lines():
+    """On the workers of a cluster the command started: their warnings as its lines too."""
+    warnings.showwarning = _show_warning
+
+
 def main(argv=None):
     """Run ``python -m proximity.cloud``; returns its exit status."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _main(argv):
     args = parse(argv)
     started = time.perf_counter()
     output = None
@@ -677,6 +696,8 @@ def main(argv=None):
                     n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=":0"
                 )
             client = Client(args.scheduler or cluster)
+            if cluster is not None:  # the command's own workers, whose stderr is its own
+                client.run(_show_warnings_as_lines)
         bar = _progress(len(points), args.progress)
         query_start = time.perf_counter()
         job = (mesh, points, output, args.chunk, args.method, args.threads, bar, args.sign)

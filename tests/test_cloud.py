@@ -212,6 +212,37 @@ def test_the_help_names_the_sign_the_command_uses_by_default(files, tmp_path, ca
     assert np.load(tmp_path / "d.npy").tobytes() == expected.tobytes()
 
 
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory):
+    """Two overlapping spheres in one STL file: a closed mesh that does not bound a solid."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    path = tmp_path_factory.mktemp("crossing") / "crossing.stl"
+    trimesh.util.concatenate([sphere, sphere.copy().apply_translation([0.5, 0, 0])]).export(path)
+    return path
+
+
+def _assert_one_warning_line(err):
+    lines = err.splitlines()
+    warned = [line for line in lines if line.startswith("proximity.cloud: warning: this mesh does not bound")]
+    assert warned and warned[0].endswith("sign='auto' or 'winding' are right"), err
+    # Not Python's form: no category, no file and line of proximity's, no source line.
+    python = ("RuntimeWarning", "warnings.warn", ".py:")
+    assert not any(word in line for line in lines for word in python), err
+
+
+def test_warnings_are_one_line_messages_of_the_command(files, crossing, tmp_path, capsys):
+    out = tmp_path / "d.npy"
+    assert _run(crossing, files["npy"], "-o", out, "--sign", "pseudonormal", "--no-progress") == 0
+    _assert_one_warning_line(capsys.readouterr().err)
+
+
+def test_warnings_of_the_commands_own_workers_are_one_line_messages(files, crossing, tmp_path, capfd):
+    out = tmp_path / "d.npy"
+    args = ("--sign", "pseudonormal", "--no-progress", "--workers", "1")
+    assert _run(crossing, files["npy"], "-o", out, *args) == 0
+    _assert_one_warning_line(capfd.readouterr().err)  # the worker's stderr is the command's
+
+
 # --- Bad input ----------------------------------------------------------------------------------
 
 
