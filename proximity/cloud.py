@@ -115,6 +115,19 @@ def _ply_vertices(path):
     return None
 
 
+def _reasons(exc):
+    """Why trimesh could not read a file: the errors of its chain (each raised while
+    handling the one before, as trimesh turns from one reader to the next), first
+    first, but the ImportErrors of the fallbacks it reached for last (a missing text
+    decoder says nothing of the file), unless they are all there is."""
+    chain = []
+    while exc is not None and exc not in chain:
+        chain.append(exc)
+        exc = exc.__cause__ if exc.__cause__ is not None or exc.__suppress_context__ else exc.__context__
+    told = [e for e in chain if not isinstance(e, ImportError)] or chain
+    return "; then ".join(f"{type(e).__name__}: {e}" for e in reversed(told))
+
+
 def read_mesh(path, merge=False):
     """The ``TriangleMesh`` of the mesh file at ``path``.
 
@@ -132,7 +145,7 @@ def read_mesh(path, merge=False):
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds, all meaning "unreadable"
-        raise InputError(f"cannot read MESH {str(path)!r} as a mesh ({type(exc).__name__}: {exc})") from None
+        raise InputError(f"cannot read MESH {str(path)!r} as a mesh (trimesh: {_reasons(exc)})") from None
     faces = getattr(loaded, "faces", None)
     if faces is None or len(faces) == 0:
         raise InputError(f"MESH {str(path)!r} holds no faces (an empty or truncated file, or a point cloud?)")

@@ -243,6 +243,19 @@ def test_warnings_of_the_commands_own_workers_are_one_line_messages(files, cross
     _assert_one_warning_line(capfd.readouterr().err)  # the worker's stderr is the command's
 
 
+def test_an_unreadable_stl_is_named_with_trimeshs_reason(tmp_path, files, capsys, monkeypatch):
+    # Neither a binary STL (its header counts faces the file does not hold) nor text:
+    # trimesh tries both, then a text decoder it may not have, which is not the reason.
+    junk = tmp_path / "junk.stl"
+    junk.write_bytes(bytes(range(128, 256)) * 3)
+    monkeypatch.setitem(sys.modules, "charset_normalizer", None)  # as where it is not installed
+    assert _run(junk, files["npy"], "-o", tmp_path / "d.npy") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"proximity.cloud: error: cannot read MESH {str(junk)!r} as a mesh (trimesh: ")
+    assert "Binary STL has incorrect length in header" in err and "UnicodeDecodeError" in err
+    assert "charset_normalizer" not in err and "ImportError" not in err
+
+
 # --- Bad input ----------------------------------------------------------------------------------
 
 
