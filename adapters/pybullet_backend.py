@@ -13,12 +13,14 @@ every :data:`RESET_EVERY` shapes.
 By default (``rescale=True``) each shape is given in its own frame:
 translated to its first vertex (or center) and scaled by a power of two so
 that its size is in ``[0.5, 1)``.  pybullet's accuracy depends on the size
-of the probe relative to the shape (it refuses a probe of radius 0): with a
-probe of radius 1e-9 in the caller's unit, triangles of size 1e-6 were off
-by up to 0.5% of their size.  In the shape's frame the probe is always the
-same small fraction of it.  ``rescale=False`` (named ``pybullet[raw]``)
-gives pybullet the caller's coordinates, the probe's radius 1e-9 in the
-caller's unit, as it would be used directly.
+of the probe relative to the shape (it refuses a probe of radius 0); in the
+shape's frame the probe is always the same small fraction of it.
+``rescale=False`` (named ``pybullet[raw]``) gives pybullet the caller's
+coordinates, the probe's radius 1e-9 in the caller's unit, as it would be
+used directly: on 400 random shapes of each size, triangles were within
+``6e-16 S`` down to a size of 1e-6, but of disks of a radius of about 1e-5,
+47 nearest points were off the disk and 205 distances beyond the tolerance
+(up to ``0.5% S``), and at 1e-6, 174 and 175 (up to ``49% S``).
 
 Probe
     ``GEOM_SPHERE`` of radius 1e-9 (of the shape's size, or of the caller's
@@ -205,7 +207,7 @@ class PybulletBackend(Backend):
         "circle": "GEOM_CAPSULE(1e-9, L) moved to K segments",
         "mesh": "GEOM_MESH(GEOM_FORCE_CONCAVE_TRIMESH)",
     }
-    probe = f"GEOM_SPHERE(radius {PROBE_RADIUS:g} in the shape's frame), added back"
+    probe = f"GEOM_SPHERE(radius {PROBE_RADIUS:g} in the frame the shape is given in), added back"
     point_frames = {
         True: "per shape: origin at a vertex or the center, scaled by a power of two",
         False: CALLER,
