@@ -52,8 +52,9 @@ moved, a posed shape's translation) and scaled by a power of two to a size
 of about 1, since fcl's segment-triangle and triangle-triangle tests have
 absolute tolerances: in the caller's coordinates, at a size of ``1e-4``,
 segment-triangle distances were off by up to 2% of the pair's size, and by
-84% at ``1e-6``, and triangle pairs a few apart were "touching" (distance
-0).  ``rescale=False`` (named ``fcl[raw]``) gives fcl the caller's
+84% at ``1e-6``; of 262 random triangle pairs apart, at ``1e-4``, fcl called
+4 "touching" (distance 0) and was off on 9 more by up to 2.2% of their
+size.  ``rescale=False`` (named ``fcl[raw]``) gives fcl the caller's
 coordinates, as it would be used directly.  Point queries are always in
 the caller's coordinates.  fcl reports the faces of both sides' BVH models
 (``DistanceResult.b1``, ``b2``), kept as ``face_a`` and ``face_b``.
