@@ -7,7 +7,9 @@ result types.  Answers that the library gives in its own conventions
 (sentinels, missing results, contact where there is none, nearest points off
 the shape) are translated to NaN with a :class:`Failure` code per row, so
 that comparisons across libraries mean something.  :func:`cross_check` asks
-them all and proximity itself, and summarises the disagreements.
+them all and proximity itself, in the caller's coordinates unless asked to
+rescale, summarises the disagreements, and lists the backends that cannot
+be given the query, with their reasons.
 
 Examples
 --------
@@ -23,13 +25,14 @@ Examples
 import importlib
 
 from ._base import BackendResult, Failure, Model, segments_for
-from .crosscheck import Case, CrossCheck, Summary, cross_check
+from .crosscheck import Case, CrossCheck, LeftOut, Summary, cross_check
 
 __all__ = [
     "BackendResult",
     "Case",
     "CrossCheck",
     "Failure",
+    "LeftOut",
     "Model",
     "NAMES",
     "Summary",
@@ -95,8 +98,10 @@ def get(name, **options):
     ----------
     name : {"fcl", "trimesh", "pybullet"}
     **options
-        Passed to the backend's constructor (``rescale`` for trimesh,
-        ``hull`` for pybullet).
+        Passed to the backend's constructor: ``rescale`` for every backend
+        (default True: each query in a frame of its own; False: the
+        caller's coordinates, the backend named ``<name>[raw]``), ``hull``
+        for pybullet.
 
     Returns
     -------

@@ -42,6 +42,13 @@ MAX_SEGMENTS = 1 << 16
 
 INSTALL_HINT = "pip install '.[adapters]' in proximity's clone"
 
+#: Where a library is given the caller's coordinates.
+CALLER = "caller's coordinates"
+#: Where a library is given the shapes of a pair in the caller's coordinates (each at its pose).
+WORLD = "the world"
+#: Where a library is given a pair in the frame of :func:`~proximity.adapters._pairs.scaled`.
+PAIR_FRAME = "per call: origin at the center of both shapes' boxes, scaled by a power of two"
+
 
 class Failure(enum.IntEnum):
     """Why a backend row has no answer.
@@ -466,12 +473,27 @@ class Backend:
     """Base of the backends: one library behind proximity's query interface.
 
     Subclasses set the class attributes and implement ``_triangles``,
-    ``_disks``, ``_circles`` and ``_meshes`` over a :class:`Query`; this class validates,
-    broadcasts, translates and builds the result.  Backends are context
-    managers; :meth:`close` releases whatever the library holds.
+    ``_disks``, ``_circles`` and ``_meshes`` over a :class:`Query` and
+    ``_pairs`` over a :class:`~proximity.adapters._pairs.PairQuery`; this
+    class validates, broadcasts, translates and builds the result.
+    Backends are context managers; :meth:`close` releases whatever the
+    library holds.
+
+    Parameters
+    ----------
+    rescale : bool, optional, keyword-only
+        Ask the library in a frame of each query's own (default True): a
+        pair centered on its shapes' boxes and scaled by a power of two to a
+        size of about 1 (:func:`~proximity.adapters._pairs.scaled`), and, for
+        the backends that do so, each point query's row or shape likewise,
+        so that libraries with absolute tolerances answer as they do at a
+        unit size.  With False the library is given the caller's
+        coordinates, as it would be used directly, and the backend's name
+        ends in ``[raw]``.  :attr:`frame` and :attr:`pair_frame` say where
+        the library worked.
     """
 
-    #: Registry name.
+    #: Registry name; an instance asked in the caller's coordinates adds ``[raw]``.
     name = ""
     #: Distribution on PyPI, for the version string.
     distribution = ""
@@ -481,10 +503,25 @@ class Backend:
     primitives = {}
     #: How the query point is given to the library.
     probe = ""
-    #: Coordinates the library works in.
-    frame = "caller's coordinates"
+    #: Coordinates the library works in for point queries, by the value of ``rescale``.
+    point_frames = {True: CALLER, False: CALLER}
     #: Kinds of shape the library models by tessellation.
     tessellated = ()
+
+    def __init__(self, *, rescale=True):
+        self.rescale = bool(rescale)
+        if not self.rescale:
+            self.name = f"{type(self).name}[raw]"
+
+    @property
+    def frame(self):
+        """Coordinates the library works in for point queries."""
+        return self.point_frames[self.rescale]
+
+    @property
+    def pair_frame(self):
+        """Coordinates the library works in for pair queries."""
+        return self.pair_frames[self.rescale]
 
     def __enter__(self):
         return self
@@ -525,8 +562,8 @@ class Backend:
     pair_models = {}
     #: How a pair is given to the library.
     pair_probe = ""
-    #: Coordinates the library works in for pairs.
-    pair_frame = "the world, each shape at its pose"
+    #: Coordinates the library works in for pairs, by the value of ``rescale``.
+    pair_frames = {True: PAIR_FRAME, False: f"{WORLD}, each shape at its pose"}
 
     def pair_rtol(self, kind_a, kind_b):
         """Relative accuracy documented for the library on a pair of kinds; :attr:`rtol` by default."""
@@ -559,17 +596,20 @@ class Backend:
             The tolerance is ``rtol (S + L) + 8 eps M``: ``S`` the pair's
             size (the largest coordinate difference between the vertices of
             both shapes, plus both radii), ``L`` the coordinate magnitude in
-            the library's frame (a frame of the pair's own, about ``S``) and
-            ``M`` in the world, ``rtol`` the backend's :meth:`pair_rtol`.
+            the library's frame (with ``rescale``, a frame of the pair's
+            own: about ``S``) and ``M`` in the world, ``rtol`` the backend's
+            :meth:`pair_rtol`; without ``rescale``, ``L = M`` and the
+            ``8 eps M`` of the moves into the frame and back is not added.
 
         Raises
         ------
         ValueError
             Where proximity refuses the pair (different dimensions, batches
-            that do not broadcast), naming both arguments; for 2D shapes.
+            that do not broadcast), naming both arguments.
         NotImplementedError
             For a kind of shape, or a pair of kinds, the backend cannot
-            give its library, naming the argument or both.
+            give its library (2D shapes among them), naming the argument or
+            both.
 
         Examples
         --------
@@ -608,6 +648,17 @@ class Backend:
         BackendResult
             proximity's result type in ``.result``, with a failure code,
             a documented tolerance per row and a description of the model.
+
+        Raises
+        ------
+        TypeError
+            If ``shape`` is not a proximity shape.
+        ValueError
+            Where proximity refuses the points (naming ``points``).
+        NotImplementedError
+            For a proximity shape the backend cannot give its library
+            (rounded or posed shapes, scenes, and kinds not in its
+            ``primitives``), naming it.
         """
         if not isinstance(shape, proximity.Shape):
             raise TypeError(f"shape must be a proximity shape; got {type(shape).__name__}")
@@ -730,7 +781,11 @@ def _flatten_shape(shape):
         return "mesh", {"vertices": shape.vertices, "faces": shape.faces}, shape
     primitive = getattr(shape, "_primitive", None)
     if primitive is None:
-        raise TypeError(f"backends answer for primitive batches and TriangleMesh; got {type(shape).__name__}")
+        # A proximity shape all the same (rounded, posed, a scene): the libraries have no model of it.
+        raise NotImplementedError(
+            f"shape is a {type(shape).__name__}: the backends' point queries take triangles, disks, "
+            "circles and meshes"
+        )
     data, embedded = {}, []
     for name, core in shape._fields:
         array = np.asarray(getattr(shape, name))

@@ -27,15 +27,22 @@ Witness points
     ``CONVEX_HULL`` where the library was given that side's convex hull),
     and the two must be the reported distance apart, else ``INCONSISTENT``.
 
+Frame
+    A backend made with ``rescale=True`` (the default) is given each pair in
+    a frame of its own (:func:`scaled`: centered on it and scaled by a power
+    of two to a size of about 1), and its answers are moved back
+    (:func:`unscaled`); with ``rescale=False``, in the caller's coordinates.
+    The choice is made here, for every backend: a backend's ``_pairs``
+    answers the query it is given.
+
 Tolerance of a row: ``rtol * (S + L)``, with ``S`` the pair's size (the
 largest coordinate difference between the vertices of both shapes, in the
 world, plus both radii; a mesh counts by its bounding box), ``L`` the
 largest coordinate magnitude the library worked with, and ``rtol`` the
-backend's for the pair of kinds (:meth:`Backend.pair_rtol`).  Backends that
-ask their library in a frame of the pair's own (:func:`scaled`: centered
-on it and scaled by a power of two) have ``L`` about ``S`` and add
-``8 eps M`` for the moves into the frame and back, ``M`` the largest
-coordinate magnitude in the world; the others have ``L = M``.
+backend's for the pair of kinds (:meth:`Backend.pair_rtol`).  In the frame
+of :func:`scaled`, ``L`` is about ``S`` and ``8 eps M`` is added for the
+moves into the frame and back, ``M`` the largest coordinate magnitude in
+the world; in the caller's coordinates ``L = M``.
 """
 
 from dataclasses import dataclass, field, replace
@@ -179,7 +186,10 @@ def _unwrap(shape, name):
     if not isinstance(core, proximity.Shape):
         raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
     if core.dim != 3:
-        raise ValueError(f"{name} must be a 3D shape for the backends' pair queries; got a {core.dim}D one")
+        # proximity answers 2D pairs; the libraries are 3D only.
+        raise NotImplementedError(
+            f"{name} is a {core.dim}D shape: the backends' pair queries take 3D shapes only"
+        )
     return core, radius, rotation, translation, posed
 
 
@@ -328,7 +338,13 @@ def closest_points(backend, a, b):
             f"it takes {', '.join(kinds)}"
         )
     query = PairQuery(sa, sb, int(reference.size))
-    raw = backend._pairs(query) if query.n else PairRaw.empty(0)
+    if not query.n:
+        raw = PairRaw.empty(0)
+    elif backend.rescale:
+        framed, origin, factor = scaled(query)
+        raw = unscaled(backend._pairs(framed), origin, factor)
+    else:
+        raw = backend._pairs(query)
     size, magnitude = _scales(sa, sb, raw.origin)
     rtol = backend.pair_rtol(sa.kind, sb.kind)
     tolerance = rtol * (size + magnitude)
@@ -379,6 +395,12 @@ def closest_points(backend, a, b):
     )
 
 
+def extent(query):
+    """``(low, high)``: the corners of the box around both sides of ``query``, every member."""
+    lows, highs = zip(*(s.extent() for s in (query.a, query.b)), strict=True)
+    return np.min([x.min(axis=0) for x in lows], axis=0), np.max([x.max(axis=0) for x in highs], axis=0)
+
+
 def scaled(query):
     """``(query, origin, factor)``: the pair in one frame for all its rows, where the
     libraries' absolute tolerances act relative to the pair.
@@ -389,9 +411,7 @@ def scaled(query):
     keeps its rotation and its translation becomes ``(t - origin) factor``.
     """
     a, b = query.a, query.b
-    lows, highs = zip(*(s.extent() for s in (a, b)), strict=True)
-    low = np.min([x.min(axis=0) for x in lows], axis=0)
-    high = np.max([x.max(axis=0) for x in highs], axis=0)
+    low, high = extent(query)
     origin = low * 0.5 + high * 0.5
     radius = max(float(a.radius.max(initial=0.0)), float(b.radius.max(initial=0.0)))
     factor = float(pow2_scale(max(float(np.max(high - low)), radius)))

@@ -4,9 +4,10 @@ Run ``python -m proximity.adapters.check`` for the default scene, or
 ``python -m proximity.adapters.check --help`` for the options.  The scene has groups
 of well-conditioned triangles, disks and circles, and groups built to show
 each library's known failure modes: degenerate and sub-millimetre
-triangles, points on a triangle's face, points in a disk's plane.  trimesh is
-asked twice: as the backend uses it (rescaled rows) and on the caller's
-coordinates (``trimesh[raw]``).
+triangles, points on a triangle's face, points in a disk's plane.  The
+libraries are asked in the caller's coordinates (the backends named
+``<name>[raw]``); ``--frames rescaled`` asks them in the backends' frames of
+each query's own instead, and ``--frames both`` asks each library both ways.
 """
 
 import argparse
@@ -21,7 +22,8 @@ from . import NAMES, available, get
 from ._base import INSTALL_HINT
 from .crosscheck import cross_check
 
-RAW_TRIMESH = "trimesh-raw"
+#: ``--frames``: the values of ``rescale`` each library is asked with.
+FRAMES = {"caller": (False,), "rescaled": (True,), "both": (False, True)}
 
 
 def _rotation(rng, n):
@@ -122,27 +124,28 @@ def main(argv=None):
     parser.add_argument(
         "--backend",
         action="append",
-        choices=(*NAMES, RAW_TRIMESH),
+        choices=NAMES,
         default=None,
-        help="backend to ask; repeat for several (default: every installed one, "
-        f"plus {RAW_TRIMESH} when trimesh is installed)",
+        help="backend to ask; repeat for several (default: every installed one)",
+    )
+    parser.add_argument(
+        "--frames",
+        choices=tuple(FRAMES),
+        default="caller",
+        help="where the libraries are asked: in the caller's coordinates (default; backends named "
+        "<name>[raw]), in the backends' rescaled frames of each query's own, or both",
     )
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error("-n must be at least 1")
 
-    if args.backend is None:
-        names = available()
-        if "trimesh" in names:
-            names.append(RAW_TRIMESH)
-    else:
-        names = list(dict.fromkeys(args.backend))
+    names = available() if args.backend is None else list(dict.fromkeys(args.backend))
     if not names:
         print(f"no backend library is installed: {INSTALL_HINT}", file=sys.stderr)
         return 1
 
     start = time.perf_counter()
-    backends = [get("trimesh", rescale=False) if name == RAW_TRIMESH else get(name) for name in names]
+    backends = [get(name, rescale=rescale) for name in names for rescale in FRAMES[args.frames]]
     print(LEGEND)
     reports = []
     try:
@@ -157,7 +160,9 @@ def main(argv=None):
             backend.close()
     print("## verdict")
     for backend in backends:
-        print(verdict(backend.name, [r.summary(backend.name) for r in reports]))
+        summaries = [s for r in reports for s in r.summaries if s.backend == backend.name]
+        left_out = sum(x.backend == backend.name for r in reports for x in r.left_out)
+        print(verdict(backend.name, summaries, left_out))
     print()
     print(
         f"{len(backends)} backends, seed {args.seed}, {args.n} rows per group, "
@@ -179,8 +184,9 @@ Each table compares every backend with proximity's most accurate method on one g
 """
 
 
-def verdict(name, summaries):
-    """One line on a backend over every group: within its tolerance or not, and what it left unanswered."""
+def verdict(name, summaries, left_out=0):
+    """One line on a backend over every group: within its tolerance or not, what it left
+    unanswered, and of how many groups it was left out (it could not be given their queries)."""
     rows = sum(s.rows for s in summaries)
     answered = sum(s.answered for s in summaries)
     beyond = sum(s.beyond_tolerance for s in summaries)
@@ -194,8 +200,12 @@ def verdict(name, summaries):
         head = f"{name}: within its documented tolerance on all {answered} answered rows"
     if failures:
         listed = ", ".join(f"{reason} {count}" for reason, count in sorted(failures.items()))
-        return f"{head}; {rows - answered} of {rows} rows not answered ({listed})"
-    return f"{head}; every one of {rows} rows answered"
+        line = f"{head}; {rows - answered} of {rows} rows not answered ({listed})"
+    else:
+        line = f"{head}; every one of {rows} rows answered"
+    if left_out:
+        line += f"; left out of {left_out} group{'s' if left_out > 1 else ''} (see each table)"
+    return line
 
 
 if __name__ == "__main__":

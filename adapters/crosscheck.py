@@ -3,6 +3,14 @@
 The reference is proximity's most accurate method.  A backend's disagreement
 on a row is ``|d_backend - d_reference|``, over the rows it answered; rows it
 could not answer are counted by :class:`~proximity.adapters.Failure` reason instead.
+A backend that cannot be given the query at all (a kind of shape, or a pair
+of kinds, its library has no model of) is left out, with its reason
+(:class:`LeftOut`).
+
+The libraries are asked in the caller's coordinates, as they would be used
+directly, unless ``rescale=True`` asks them in the backends' frames of each
+query's own (see :class:`~proximity.adapters._base.Backend`), where
+libraries with absolute tolerances answer as they do at a unit size.
 """
 
 import types
@@ -47,7 +55,7 @@ class Summary:
     >>> import numpy as np, proximity, proximity.adapters as adapters
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
-    >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh")
+    >>> s = adapters.cross_check(circle, points, backends=["trimesh"]).summary("trimesh[raw]")
     >>> s.rows, s.answered, dict(s.failures), s.max_relative < 1e-3
     (20, 20, {}, True)
     """
@@ -78,7 +86,7 @@ class Case:
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> case = adapters.cross_check(circle, points, backends=["trimesh"], worst=1).worst[0]
     >>> case.backend, bool(case.disagreement == abs(case.distance - case.reference)), case.ratio < 1
-    ('trimesh', True, True)
+    ('trimesh[raw]', True, True)
     """
 
     backend: str
@@ -92,6 +100,34 @@ class Case:
     ratio: float
 
 
+@dataclass(frozen=True)
+class LeftOut:
+    """A backend that could not be given the query, and why.
+
+    Examples
+    --------
+    trimesh's pair queries take triangles and meshes only:
+
+    >>> import proximity, proximity.adapters as adapters
+    >>> from proximity.testing.meshes import icosphere
+    >>> ball = proximity.TriangleMesh(*icosphere(1, 1.0))
+    >>> report = adapters.cross_check(proximity.Point([3, 0, 0]), ball, backends=["fcl", "trimesh"])
+    >>> [s.backend for s in report.summaries], [x.backend for x in report.left_out]
+    (['fcl[raw]'], ['trimesh[raw]'])
+    >>> print(report)  # doctest: +ELLIPSIS
+    Point of batch shape () and TriangleMesh of 80 primitives against proximity certified
+    backend   model ...
+    fcl[raw]  a: Sphere(0); b: BVHModel(F triangles) ...
+    <BLANKLINE>
+    left out, as they cannot be given this query:
+      trimesh[raw]: the trimesh[raw] backend has no pair query for a point (a) and a mesh (b);
+      it takes triangle, mesh
+    """
+
+    backend: str
+    reason: str
+
+
 @dataclass(frozen=True, repr=False)
 class CrossCheck:
     """The result of :func:`cross_check`.
@@ -103,10 +139,13 @@ class CrossCheck:
     reference : str
         The proximity method used as reference.
     summaries : tuple of Summary
-        One per backend, in the order asked.
+        One per backend that answered, in the order asked.
     worst : tuple of Case
         For each backend, its answered rows with the largest
         disagreement-to-tolerance ratio, largest first.
+    left_out : tuple of LeftOut
+        The backends that could not be given the query, in the order asked,
+        each with its reason.
 
     Examples
     --------
@@ -114,8 +153,8 @@ class CrossCheck:
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
-    >>> report.reference, [s.backend for s in report.summaries], len(report.worst)
-    ('certified', ['trimesh'], 3)
+    >>> report.reference, [s.backend for s in report.summaries], len(report.worst), report.left_out
+    ('certified', ['trimesh[raw]'], 3, ())
     >>> print(report.table().splitlines()[0])
     Circle of batch shape () against proximity certified
     """
@@ -124,12 +163,23 @@ class CrossCheck:
     reference: str
     summaries: tuple
     worst: tuple
+    left_out: tuple = ()
 
     def summary(self, backend):
-        """The :class:`Summary` of the backend named ``backend``."""
+        """The :class:`Summary` of the backend named ``backend``.
+
+        Raises
+        ------
+        KeyError
+            If that backend was not asked, or was left out (the message
+            gives its reason).
+        """
         for s in self.summaries:
             if s.backend == backend:
                 return s
+        for x in self.left_out:
+            if x.backend == backend:
+                raise KeyError(f"backend {backend!r} was left out of this cross-check: {x.reason}")
         raise KeyError(
             f"no backend {backend!r} in this cross-check; have {[s.backend for s in self.summaries]}"
         )
@@ -140,7 +190,7 @@ class CrossCheck:
     __repr__ = __str__
 
     def table(self):
-        """The summaries and the worst cases as a plain-text table (what ``print`` shows)."""
+        """The summaries, the worst cases and the backends left out, as plain text (what ``print`` shows)."""
         rows = [
             ("backend", "model", "answered", "max |dd|/S", "median |dd|/S", "max |dd|", ">tol", "failures")
         ]
@@ -158,7 +208,11 @@ class CrossCheck:
                     failures,
                 )
             )
-        lines = [f"{self.shape} against proximity {self.reference}", *_format(rows)]
+        lines = [f"{self.shape} against proximity {self.reference}"]
+        if self.summaries:
+            lines += _format(rows)
+        else:
+            lines.append("no backend answered")
         if self.worst:
             cases = [("backend", "index", "distance", "reference", "|dd|", "tol", "|dd|/tol")]
             for c in self.worst:
@@ -174,35 +228,58 @@ class CrossCheck:
                     )
                 )
             lines += ["", "largest disagreements, relative to each backend's tolerance:", *_format(cases)]
+        if self.left_out:
+            lines += ["", "left out, as they cannot be given this query:"]
+            lines += [f"  {x.backend}: {x.reason}" for x in self.left_out]
         return "\n".join(lines)
 
 
-def cross_check(shape, points, backends=None, tol=None, *, worst=3):
+def cross_check(shape, points, backends=None, tol=None, *, worst=3, rescale=False):
     """Ask every backend and proximity the same query, and compare.
 
     Parameters
     ----------
-    shape : proximity.Triangle, proximity.Disk or proximity.Circle
-        One shape or a batch; for a pair query, any shape
-        :meth:`Backend.closest_points` takes.
+    shape : Shape
+        One shape or a batch: for a point query, a shape the backends'
+        :meth:`Backend.closest_point` takes (triangles, disks, circles,
+        meshes); for a pair query, any shape :meth:`Backend.closest_points`
+        takes.  A backend that takes neither is left out.
     points : array_like, shape ``(..., D)``, or Shape
         Query points, broadcast against the shape's batch; or a second
         shape: the backends' :meth:`Backend.closest_points` of the pair are
         compared with :func:`proximity.distance` of the pair, as
         :func:`proximity.distance` reads its second argument.
     backends : iterable of str or Backend, optional
-        Backend names (created here and closed afterwards) or backend
-        objects (left open).  Default: every name in :func:`available`.
+        Backend names (created here, with ``rescale``, and closed
+        afterwards) or backend objects (asked as they were made, and left
+        open).  Default: every name in :func:`available`.
     tol : float, optional
         Modelling tolerance passed to each backend (see
         :meth:`Backend.closest_point`); default ``1e-3 R``.
     worst : int, optional
         How many of its largest disagreements to keep per backend.
+    rescale : bool, optional
+        Create the named backends with ``rescale=True``, which asks each
+        library in a frame of each query's own (a pair centered and scaled
+        by a power of two to a size of about 1; for trimesh and pybullet,
+        each point query's row or shape likewise).  Default False: the
+        libraries are given the caller's coordinates, as they would be used
+        directly, and the backends are named ``<name>[raw]``.
 
     Returns
     -------
     CrossCheck
-        Per-backend summaries and worst cases; ``.table()`` formats them.
+        Per-backend summaries and worst cases, and the backends left out
+        with their reasons; ``.table()`` formats them.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Where proximity refuses the query (it is validated as
+        :func:`proximity.distance` validates it).
+    NotImplementedError
+        Where proximity itself has no answer for the pair.  A backend that
+        cannot be given the query is left out, never raised.
 
     Examples
     --------
@@ -210,13 +287,13 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     >>> circle = proximity.Circle(center=[0, 0, 0], normal=[0, 0, 1], radius=1.0)
     >>> points = np.random.default_rng(0).normal(size=(20, 3))
     >>> report = adapters.cross_check(circle, points, backends=["trimesh"])
-    >>> s = report.summary("trimesh")
+    >>> s = report.summary("trimesh[raw]")
     >>> s.answered, s.beyond_tolerance, s.max_disagreement <= 1e-3
     (20, 0, True)
     >>> print(report)  # doctest: +ELLIPSIS
     Circle of batch shape () against proximity certified
-    backend  model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
-    trimesh  ...    20/20     ...
+    backend       model  answered  max |dd|/S  median |dd|/S  max |dd|  >tol  failures
+    trimesh[raw]  ...    20/20     ...
 
     A pair query: 50 capsules against 50 triangles, the last 10 of them
     crossing the capsules' axes.  fcl answers those with witness points
@@ -228,9 +305,20 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
     >>> around = [[2, 0, 0], [-1, 2, 0], [-1, -2, 0]]      # centroid at the origin
     >>> tri[40:] = axes[40:].mean(axis=1, keepdims=True) + around
     >>> pair = adapters.cross_check(proximity.Capsule(axes, 0.25), proximity.Triangle(tri), backends=["fcl"])
-    >>> s = pair.summary("fcl")
+    >>> s = pair.summary("fcl[raw]")
     >>> s.rows, s.answered, s.beyond_tolerance, s.failures["CONTACT"]
     (50, 50, 0, 10)
+
+    Triangle pairs of a size of 1e-4: fcl's triangle tests have absolute
+    tolerances, so that in the caller's coordinates some of its distances
+    are wrong, which it is not in a frame of the pair's own.
+
+    >>> a = proximity.Triangle(rng.normal(size=(200, 3, 3)) * 1e-4)
+    >>> b = proximity.Triangle((rng.normal(size=(200, 3, 3)) + [3, 0, 0]) * 1e-4)
+    >>> raw = adapters.cross_check(a, b, backends=["fcl"]).summary("fcl[raw]")
+    >>> rescaled = adapters.cross_check(a, b, backends=["fcl"], rescale=True).summary("fcl")
+    >>> raw.beyond_tolerance > 0, raw.max_relative > 1e-3, rescaled.beyond_tolerance
+    (True, True, 0)
     """
     from . import available, get
 
@@ -242,35 +330,50 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3):
             if isinstance(b, Backend):
                 instances.append(b)
             else:
-                instance = get(b)
+                instance = get(b, rescale=rescale)
                 owned.append(instance)
                 instances.append(instance)
         pair = isinstance(points, proximity.Shape)
+        # proximity validates the query (and raises where it has no answer) before any backend is asked.
         if pair:
             methods = set(shape.methods) & set(points.methods)
             method = "certified" if "certified" in methods else "robust"
             reference = np.asarray(proximity.distance(shape, points, method=method), dtype=np.float64)
-            scale = np.asarray(pair_scale(shape, points), dtype=np.float64)
-            point_rows = np.zeros(reference.shape + (0,))
         else:
             method = best_method(shape)
             reference = np.asarray(shape.distance(points, method=method), dtype=np.float64)
-            scale = np.asarray(error_scale(shape, points), dtype=np.float64)
-            point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
-        summaries, cases = [], []
+        answers, left_out = [], []
         for backend in instances:
-            if pair:
-                r = backend.closest_points(shape, points)
-            else:
-                r = backend.closest_point(shape, points, tol=tol)
-            summary, worst_cases = _summarise(backend.name, r, reference, scale, point_rows, worst)
-            summaries.append(summary)
-            cases.extend(worst_cases)
+            try:
+                if pair:
+                    answers.append(backend.closest_points(shape, points))
+                else:
+                    answers.append(backend.closest_point(shape, points, tol=tol))
+            except NotImplementedError as exc:  # the library has no model of the query
+                left_out.append(LeftOut(backend=backend.name, reason=str(exc)))
     finally:
         for instance in owned:
             instance.close()
+    summaries, cases = [], []
+    if answers:  # the scales are those of shapes some backend takes
+        if pair:
+            scale = np.asarray(pair_scale(shape, points), dtype=np.float64)
+            point_rows = np.zeros(reference.shape + (0,))
+        else:
+            scale = np.asarray(error_scale(shape, points), dtype=np.float64)
+            point_rows = np.broadcast_to(np.asarray(points, dtype=np.float64), reference.shape + (shape.dim,))
+        for r in answers:
+            summary, worst_cases = _summarise(r.backend, r, reference, scale, point_rows, worst)
+            summaries.append(summary)
+            cases.extend(worst_cases)
     described = f"{_describe(shape)} and {_describe(points)}" if pair else _describe(shape)
-    return CrossCheck(shape=described, reference=method, summaries=tuple(summaries), worst=tuple(cases))
+    return CrossCheck(
+        shape=described,
+        reference=method,
+        summaries=tuple(summaries),
+        worst=tuple(cases),
+        left_out=tuple(left_out),
+    )
 
 
 def _describe(shape):

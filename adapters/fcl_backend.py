@@ -46,14 +46,18 @@ requested.  A point is ``Sphere(0)``, a sphere ``Sphere(R)``, a segment
 the segment), a triangle a one-triangle ``BVHModel`` (``TriangleP`` pairs
 have no distance: 1.797e308 with a warning) and a mesh one ``BVHModel``; a
 posed shape's pose is its object's ``Transform`` (composed with a capsule's
-own frame).  Every pair of a call is given in one frame: centered on the
-shapes' boxes (an unposed shape's vertices moved, a posed shape's
-translation) and scaled by a power of two to a size of about 1, since fcl's
-segment-triangle and triangle-triangle tests have absolute tolerances: in
-the caller's coordinates, at a size of ``1e-4``, segment-triangle distances
-were off by up to 2% of the pair's size, and by 84% at ``1e-6``.  fcl
-reports the faces of both sides' BVH models (``DistanceResult.b1``,
-``b2``), kept as ``face_a`` and ``face_b``.
+own frame).  By default (``rescale=True``) every pair of a call is given in
+one frame: centered on the shapes' boxes (an unposed shape's vertices
+moved, a posed shape's translation) and scaled by a power of two to a size
+of about 1, since fcl's segment-triangle and triangle-triangle tests have
+absolute tolerances: in the caller's coordinates, at a size of ``1e-4``,
+segment-triangle distances were off by up to 2% of the pair's size, and by
+84% at ``1e-6``; of 262 random triangle pairs apart, at ``1e-4``, fcl called
+4 "touching" (distance 0) and was off on 9 more by up to 2.2% of their
+size.  ``rescale=False`` (named ``fcl[raw]``) gives fcl the caller's
+coordinates, as it would be used directly.  Point queries are always in
+the caller's coordinates.  fcl reports the faces of both sides' BVH models
+(``DistanceResult.b1``, ``b2``), kept as ``face_a`` and ``face_b``.
 
 * A shape against a BVH model: fcl returns the BVH model's nearest point
   first whatever the order asked, so BVH models are asked first; and a
@@ -73,8 +77,8 @@ reports the faces of both sides' BVH models (``DistanceResult.b1``,
 
 import numpy as np
 
-from ._base import Backend, Failure, Raw, import_library, norm, plane_frame, polygon
-from ._pairs import PairRaw, scaled, segment_frames, unscaled
+from ._base import PAIR_FRAME, WORLD, Backend, Failure, Raw, import_library, norm, plane_frame, polygon
+from ._pairs import PairRaw, segment_frames
 
 #: fcl's answer for a pair it has no distance function for is DBL_MAX.
 UNSUPPORTED = 1.7e308
@@ -100,6 +104,13 @@ def load():
 class FclBackend(Backend):
     """Closest points by python-fcl.
 
+    Parameters
+    ----------
+    rescale : bool, optional, keyword-only
+        Give fcl each pair query in a frame of the pair's own (default
+        True); see the module docstring.  Point queries are always in the
+        caller's coordinates.
+
     Examples
     --------
     >>> import proximity, proximity.adapters as adapters
@@ -122,7 +133,8 @@ class FclBackend(Backend):
     probe = "Sphere(0) at the point"
     tessellated = ("circle",)
 
-    def __init__(self):
+    def __init__(self, *, rescale=True):
+        super().__init__(rescale=rescale)
         self._fcl = load()
         self._request = self._fcl.DistanceRequest(enable_nearest_points=True)
 
@@ -225,19 +237,12 @@ class FclBackend(Backend):
         "mesh": "BVHModel(F triangles)",
     }
     pair_probe = "fcl.distance(a, b), nearest points requested; BVH models first"
-    pair_frame = (
-        "per call: origin at the center of both shapes' boxes, scaled by a power of two; "
-        "a posed shape's pose is its CollisionObject's Transform"
-    )
+    pair_frames = {
+        rescale: f"{frame}; a posed shape's pose is its CollisionObject's Transform"
+        for rescale, frame in ((True, PAIR_FRAME), (False, WORLD))
+    }
 
     def _pairs(self, query):
-        # fcl's segment-triangle and triangle-triangle tests have absolute tolerances
-        # (errors of 2% of the pair's size at a size of 1e-4): it is asked in a frame
-        # where the pair's size is about 1.
-        query, origin, factor = scaled(query)
-        return unscaled(self._pairs_in_frame(query), origin, factor)
-
-    def _pairs_in_frame(self, query):
         fcl = self._fcl
         a, b = query.a, query.b
         objects = {"a": _pair_objects(fcl, a), "b": _pair_objects(fcl, b)}

@@ -73,8 +73,19 @@ only, either side: no face is reported.
 
 import numpy as np
 
-from ._base import Backend, Failure, Raw, import_library, norm, plane_frame, pow2_scale
-from ._pairs import PairRaw, scaled, unscaled
+from ._base import (
+    CALLER,
+    PAIR_FRAME,
+    WORLD,
+    Backend,
+    Failure,
+    Raw,
+    import_library,
+    norm,
+    plane_frame,
+    pow2_scale,
+)
+from ._pairs import PairRaw
 
 #: Relative accuracy of ``min_distance_other``, which asks fcl for signed
 #: distances: in the pair's frame, distances were off by up to 1.1e-8 of the
@@ -97,9 +108,11 @@ class TrimeshBackend(Backend):
 
     Parameters
     ----------
-    rescale : bool, optional
+    rescale : bool, optional, keyword-only
         Translate each row to the query point and scale it by a power of two
-        before calling trimesh (default True); see the module docstring.
+        before calling trimesh, and give it each pair in a frame of the
+        pair's own (default True); see the module docstring.  With False
+        (named ``trimesh[raw]``), the caller's coordinates.
 
     Examples
     --------
@@ -127,20 +140,17 @@ class TrimeshBackend(Backend):
         "mesh": "Trimesh(F faces)",
     }
     pair_probe = "CollisionManager.min_distance_other, one manager per side"
-    pair_frame = "the world; a posed mesh's pose is its transform in the CollisionManager"
+    point_frames = {True: "per row: origin at the point, scaled by a power of two", False: CALLER}
+    pair_frames = {
+        rescale: f"{frame}; a posed shape's pose is its transform in the CollisionManager"
+        for rescale, frame in ((True, PAIR_FRAME), (False, WORLD))
+    }
 
     def pair_rtol(self, kind_a, kind_b):
         """``1e-6`` (see the module docstring)."""
         return PAIR_RTOL
 
     def _pairs(self, query):
-        if not self.rescale:
-            return self._pairs_in_frame(query)
-        # fcl, which trimesh asks, has absolute tolerances in its triangle tests.
-        query, origin, factor = scaled(query)
-        return unscaled(self._pairs_in_frame(query), origin, factor)
-
-    def _pairs_in_frame(self, query):
         collision = self._trimesh.collision
         a, b = query.a, query.b
         managers = {}
@@ -168,19 +178,9 @@ class TrimeshBackend(Backend):
         return raw
 
     def __init__(self, *, rescale=True):
+        super().__init__(rescale=rescale)
         self._trimesh = load()
         self._closest = self._trimesh.triangles.closest_point
-        self.rescale = bool(rescale)
-        if not self.rescale:
-            self.name = "trimesh[raw]"
-            self.frame = "caller's coordinates"
-            self.pair_frame = "the world; a posed shape's pose is its transform in the CollisionManager"
-        else:
-            self.frame = "per row: origin at the point, scaled by a power of two"
-            self.pair_frame = (
-                "per call: origin at the center of both shapes' boxes, scaled by a power of two; "
-                "a posed shape's pose is its transform in the CollisionManager"
-            )
 
     def _nearest(self, triangles, points, rows, n):
         """Nearest of several triangles per row: ``triangles[j]`` belongs to row ``rows[j]``."""

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import proximity
-from proximity import Capsule, Disk, Segment, Sphere, Triangle, TriangleMesh, adapters
+from proximity import Capsule, Disk, Point, Segment, Sphere, Triangle, TriangleMesh, adapters
 from proximity.adapters import Failure
 from proximity.adapters._pairs import segment_frames
 from proximity.testing import exact
@@ -390,7 +390,7 @@ def test_bad_input_names_the_arguments(backends):
         fcl.closest_points(tri.inflated(0.1), tri)
     with pytest.raises(NotImplementedError, match=r"capsule \(a\) and a triangle \(b\)"):
         backends["trimesh"].closest_points(Capsule([[0, 0, 0], [1, 0, 0]], 0.1), tri)
-    with pytest.raises(ValueError, match="3D"):
+    with pytest.raises(NotImplementedError, match="a is a 2D shape.*3D shapes only"):
         fcl.closest_points(Triangle([[0, 0], [1, 0], [0, 1]]), Triangle([[0, 2], [1, 2], [0, 3]]))
     with pytest.raises(TypeError, match="b must be a proximity shape"):
         fcl.closest_points(tri, "a triangle")
@@ -401,7 +401,7 @@ def test_cross_check_of_pairs_counts_contact_and_stays_within_tolerance():
     a, b, _, _ = pairs(rng, "segment", "triangle", 12)
     report = adapters.cross_check(a, b, backends=["fcl", "pybullet"], worst=2)
     assert report.shape == "Segment of batch shape (12,) and Triangle of batch shape (12,)"
-    for name in ("fcl", "pybullet"):
+    for name in ("fcl[raw]", "pybullet[raw]"):
         s = report.summary(name)
         assert s.rows == 12 and s.answered == 12 and s.beyond_tolerance == 0
         assert s.failures.get("CONTACT", 0) >= 1
@@ -414,11 +414,114 @@ def test_trimesh_on_the_callers_coordinates_is_wrong_on_small_pairs_and_cross_ch
     _, _, va, vb = pairs(rng, "triangle", "triangle", 40)
     a, b = Triangle(va * 1e-4), Triangle(vb * 1e-4)
     with adapters.get("trimesh", rescale=False) as raw:
-        report = adapters.cross_check(a, b, backends=["trimesh", raw])
+        report = adapters.cross_check(a, b, backends=["trimesh", raw], rescale=True)
         assert raw.closest_points(a, b).model.frame.startswith("the world")
     assert report.summary("trimesh").beyond_tolerance == 0
     s = report.summary("trimesh[raw]")
     assert s.beyond_tolerance > 0 and s.max_relative > 1e-4
+
+
+def test_cross_check_asks_fcl_in_the_callers_coordinates_where_it_is_wrong_on_small_pairs():
+    # Triangle pairs of a size of 1e-4, all apart: fcl's triangle tests have absolute
+    # tolerances, and in the caller's coordinates some of its distances are 0 or wrong.
+    rng = np.random.default_rng(11)
+    _, _, va, vb = pairs(rng, "triangle", "triangle", 400)
+    va, vb = va[:300] * 1e-4, vb[:300] * 1e-4  # the last quarter crosses
+    apart = proximity.distance(Triangle(va), Triangle(vb), method="certified") > 0
+    a, b = Triangle(va[apart]), Triangle(vb[apart])
+    report = adapters.cross_check(a, b, backends=["fcl"])
+    s = report.summary("fcl[raw]")
+    assert s.model.frame.startswith("the world")
+    assert s.failures.get("FALSE_TOUCHING", 0) >= 2  # "touching", where the triangles are apart
+    assert s.beyond_tolerance >= 5 and s.max_relative > 1e-3
+    # The worst rows are wrong against the exact distance too.
+    worst = report.worst[0]
+    (i,) = worst.index
+    exact_distance = float(exact.triangle_triangle_closest(va[apart][i], vb[apart][i]).distance)
+    assert abs(worst.distance - exact_distance) > worst.tolerance
+    # In a frame of each pair's own fcl is right: the rescaled mode, asked for.
+    s = adapters.cross_check(a, b, backends=["fcl"], rescale=True).summary("fcl")
+    assert s.answered == s.rows and s.beyond_tolerance == 0 and s.max_relative < 1e-12
+    assert s.model.frame.startswith("per call: origin at the center")
+
+
+def test_cross_check_leaves_out_a_backend_that_cannot_be_given_the_pair():
+    ball = TriangleMesh(*icosphere(1, 1.0))
+    point, capsule = Point([[3.0, 0, 0], [0, 2.5, 0]]), Capsule([[3, 0, 0], [4, 0, 0]], 0.2)
+    for a, kind in ((point, "point"), (capsule, "capsule")):
+        report = adapters.cross_check(a, ball)  # every backend; trimesh's pairs are of triangles and meshes
+        assert [s.backend for s in report.summaries] == ["fcl[raw]", "pybullet[raw]"]
+        for s in report.summaries:
+            assert s.answered == s.rows and s.beyond_tolerance == 0
+        (left,) = report.left_out
+        assert left.backend == "trimesh[raw]"
+        assert f"no pair query for a {kind} (a) and a mesh (b)" in left.reason
+        table = report.table()
+        assert "left out" in table and f"trimesh[raw]: {left.reason}" in table
+        left_out = r"backend .trimesh\[raw\]. was left out of this cross-check: .*no pair query"
+        with pytest.raises(KeyError, match=left_out):
+            report.summary("trimesh[raw]")
+
+
+def test_cross_check_of_a_query_no_backend_takes_leaves_every_one_out_and_proximity_still_validates():
+    # proximity answers 2D pairs
+    flat = Triangle([[0, 0], [1, 0], [0, 1]]), Triangle([[0, 2], [1, 2], [0, 3]])
+    sphere = Sphere([0, 0, 0], 0.5), [[1.0, 0, 0]]  # no backend models a sphere for point queries
+    for query, why in ((flat, "a is a 2D shape"), (sphere, "shape is a Sphere")):
+        report = adapters.cross_check(*query)
+        assert report.summaries == () and report.worst == ()
+        assert [x.backend for x in report.left_out] == [f"{name}[raw]" for name in adapters.NAMES]
+        assert all(x.reason.startswith(why) for x in report.left_out)
+        assert "no backend answered" in str(report)
+    # What proximity refuses, or cannot answer, is still raised.
+    tri = Triangle(np.zeros((3, 3, 3)) + [[0, 0, 1], [1, 0, 1], [0, 1, 1]])
+    with pytest.raises(ValueError, match=r"\ba\b.*\bb\b"):
+        adapters.cross_check(Segment(np.zeros((2, 2, 3)) + [[0, 0, 0], [1, 0, 0]]), tri)
+    with pytest.raises(NotImplementedError, match=r"disk \(a\) and a triangle \(b\)"):
+        adapters.cross_check(Disk([0, 0, 0], [0, 0, 1], 1.0), tri)
+
+
+@pytest.mark.parametrize("name", ["fcl", "trimesh", "pybullet"])
+def test_backends_in_the_callers_coordinates_answer_unit_pairs_within_their_tolerance(name):
+    rng = np.random.default_rng(12)
+    a, b, _, _ = pairs(rng, "triangle", "triangle", 12)
+    posed = b.transformed(pose(rng, [0.5, 0.0, 0.2]))
+    with adapters.get(name, rescale=False) as raw, adapters.get(name) as rescaled:
+        assert raw.name == f"{name}[raw]" and rescaled.name == name
+        for pair in ((a, b), (a, posed)):
+            r = raw.closest_points(*pair)
+            assert r.model.frame.startswith("the world") and r.backend == f"{name}[raw]"
+            answered = np.isin(r.failure, [Failure.OK, Failure.CONTACT])
+            assert answered.all(), [Failure(f).name for f in r.failure]
+            ref = proximity.distance(*pair, method="certified")
+            np.testing.assert_array_less(np.abs(r.distance - ref), r.tolerance)
+            # In the caller's coordinates, L is the world's magnitude and no move is added.
+            assert (r.tolerance <= rescaled.closest_points(*pair).tolerance * 4).all()
+
+
+@pytest.mark.xfail(
+    raises=TypeError,
+    strict=True,
+    reason="proximity.pair.queries._Side converts a one-element radius array with float()",
+)
+def test_one_element_radius_arrays_are_rounded_shapes_of_that_radius(backends):
+    tri = Triangle([[[3, 0, 0], [4, 0, 0], [3, 1, 0]]])
+    axis = [[[0, 0, 0], [1, 0, 0]]]
+    for a, b in (
+        (Sphere(np.zeros((1, 3)), [0.5]), Sphere(np.zeros((1, 3)), 0.5)),
+        (Capsule(axis, [0.2]), Capsule(axis, 0.2)),
+        (Segment(axis).inflated([0.2]), Segment(axis).inflated(0.2)),
+    ):
+        for name in ("fcl", "pybullet"):
+            got, expected = backends[name].closest_points(a, tri), backends[name].closest_points(b, tri)
+            assert got.failure.tolist() == expected.failure.tolist() == [Failure.OK]
+            assert got.distance.tolist() == expected.distance.tolist()
+        report = adapters.cross_check(a, tri)
+        assert [s.backend for s in report.summaries] == ["fcl[raw]", "pybullet[raw]"]
+        assert [x.backend for x in report.left_out] == ["trimesh[raw]"]
+    rounded = TriangleMesh(*icosphere(1, 1.0)).inflated([0.1])
+    report = adapters.cross_check(rounded, tri)
+    assert report.summaries == () and all("rounded TriangleMesh" in x.reason for x in report.left_out)
 
 
 @pytest.mark.parametrize("module", ["proximity.adapters._base", "proximity.adapters.crosscheck"])

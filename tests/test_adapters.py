@@ -526,23 +526,26 @@ def test_cross_check_counts_failures_and_ranks_disagreements():
     tri = Triangle([DEGENERATE["collinear"], DEGENERATE["a point"], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]])
     points = [[0.5, 3.0, 0.0], [5.0, 5.0, 5.0], [0.2, 0.2, 1.0]]
     report = adapters.cross_check(tri, points)
-    assert [s.backend for s in report.summaries] == names
+    # By default every library is asked in the caller's coordinates.
+    raw = [f"{name}[raw]" for name in names]
+    assert [s.backend for s in report.summaries] == raw and report.left_out == ()
     assert report.reference in ("certified", "robust")
     for s in report.summaries:
         assert s.rows == 3 and s.answered + sum(s.failures.values()) == 3
+        assert s.model.frame == "caller's coordinates"
     if "fcl" in names:
-        s = report.summary("fcl")
+        s = report.summary("fcl[raw]")
         assert s.answered == 1 and dict(s.failures) == {"FALSE_TOUCHING": 2}
     if "pybullet" in names:
-        assert dict(report.summary("pybullet").failures) == {"NO_RESULT": 2}
+        assert dict(report.summary("pybullet[raw]").failures) == {"NO_RESULT": 2}
     if "trimesh" in names:
-        s = report.summary("trimesh")
+        s = report.summary("trimesh[raw]")
         assert s.answered == 3 and s.beyond_tolerance == 0 and s.max_relative < 1e-15
-    for name in names:
+    for name in raw:
         ratios = [c.ratio for c in report.worst if c.backend == name]
         assert ratios == sorted(ratios, reverse=True)
     table = report.table()
-    for name in names:
+    for name in raw:
         assert name in table
     with pytest.raises(KeyError):
         report.summary("ode")
@@ -554,7 +557,8 @@ def test_cross_check_sees_trimesh_raw_disagreement_and_leaves_given_backends_ope
     tri = Triangle(good_triangles(rng, 100, size=1e-4))
     points = tri.vertices.mean(axis=1) + rng.normal(size=(100, 3)) * 1e-4
     raw = adapters.get("trimesh", rescale=False)
-    report = adapters.cross_check(tri, points, backends=["trimesh", raw], worst=2)
+    # A backend given as an object is asked as it was made; one given by name, with rescale.
+    report = adapters.cross_check(tri, points, backends=["trimesh", raw], worst=2, rescale=True)
     assert report.summary("trimesh").beyond_tolerance == 0
     s = report.summary("trimesh[raw]")
     assert s.beyond_tolerance > 0 and s.max_relative > 0.01
@@ -562,6 +566,54 @@ def test_cross_check_sees_trimesh_raw_disagreement_and_leaves_given_backends_ope
     assert len(worst) == 2 and worst[0].ratio > 1
     assert worst[0].disagreement == pytest.approx(abs(worst[0].distance - worst[0].reference))
     assert (raw.closest_point(tri, points).failure == Failure.OK).all()  # still usable
+
+
+def test_cross_check_asks_point_queries_in_the_callers_coordinates_unless_asked_to_rescale():
+    for library in ("trimesh", "pybullet"):
+        pytest.importorskip(library)
+    # Disks of a radius of about 1e-5: trimesh's region tests have absolute tolerances (on
+    # the fan's triangles), and pybullet's probe of radius 1e-9 is 1e-4 of the disk.
+    rng = np.random.default_rng(8)
+    disk = Disk(rng.normal(size=(50, 3)) * 1e-5, rng.normal(size=(50, 3)), rng.uniform(0.2, 2.0, 50) * 1e-5)
+    points = np.asarray(disk.center) + rng.normal(size=(50, 3)) * 1e-5
+    report = adapters.cross_check(disk, points, backends=["trimesh", "pybullet"])
+    for name in ("trimesh[raw]", "pybullet[raw]"):
+        s = report.summary(name)
+        assert s.model.frame == "caller's coordinates"
+        assert s.beyond_tolerance + sum(s.failures.values()) >= 5, (name, s)
+    report = adapters.cross_check(disk, points, backends=["trimesh", "pybullet"], rescale=True)
+    for name in ("trimesh", "pybullet"):
+        s = report.summary(name)
+        assert s.model.frame.startswith("per ")
+        assert s.answered == 50 and s.beyond_tolerance == 0, (name, s)
+
+
+@pytest.mark.parametrize("name", [p.values[0] for p in BACKENDS], ids=[p.values[0] for p in BACKENDS])
+def test_backends_in_the_callers_coordinates_agree_on_unit_scenes(name):
+    pytest.importorskip(LIBRARIES[name])
+    with adapters.get(name, rescale=False) as backend:
+        assert backend.name == f"{name}[raw]" and backend.rescale is False
+        for seed, kind in enumerate(("triangle", "triangle2d", "disk", "circle")):
+            shape, points = scene(kind, np.random.default_rng(seed))
+            r = backend.closest_point(shape, points)
+            assert r.backend == f"{name}[raw]" and r.model.frame == "caller's coordinates"
+            assert (r.failure == Failure.OK).all(), (kind, [Failure(f).name for f in r.failure.ravel()])
+            np.testing.assert_allclose(r.tolerance, documented_tolerance(backend, shape, points), rtol=1e-12)
+            assert (np.abs(r.distance - proximity.distance(shape, points)) <= r.tolerance).all(), kind
+            assert (proximity.distance(shape, r.point) <= r.tolerance).all(), kind
+
+
+def test_check_command_asks_in_the_frames_asked(capsys):
+    from proximity.adapters import check
+
+    pytest.importorskip("trimesh")
+    assert check.main(["-n", "2", "--backend", "trimesh", "--frames", "both"]) == 0
+    out = capsys.readouterr().out
+    verdicts = [line.split(":")[0] for line in out.splitlines() if line.startswith("trimesh")]
+    assert verdicts[-2:] == ["trimesh[raw]", "trimesh"]
+    assert check.main(["-n", "2", "--backend", "trimesh", "--frames", "rescaled"]) == 0
+    out = capsys.readouterr().out
+    assert "\ntrimesh " in out and "trimesh[raw]" not in out
 
 
 @pytest.mark.parametrize(
@@ -600,6 +652,7 @@ def test_check_command_prints_a_table_per_group(capsys):
     for label in ("## triangles", "## degenerate triangles", "## disks", "## circles"):
         assert label in out
     for name in adapters.available():
+        name = f"{name}[raw]"  # in the caller's coordinates, by default
         assert f"\n{name} " in out
         verdicts = [line for line in out.splitlines() if line.startswith(f"{name}: ")]
         assert len(verdicts) == 1 and "documented tolerance" in verdicts[0]

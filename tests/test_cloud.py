@@ -194,6 +194,68 @@ def test_signed_distances(files, tmp_path, capsys):
     assert np.load(out).tobytes() == expected.tobytes()
 
 
+def test_the_help_names_the_sign_the_command_uses_by_default(files, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        cloud.parser().parse_args(["--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    sign_help = help_text[help_text.index("--sign {") : help_text.index("--closest-points also")]
+    stated = __import__("re").findall(r"(\w+) \((?:the )?default", sign_help)
+    assert len(stated) == 1, sign_help
+    # What --signed does without --sign, as the last line says...
+    assert _run(files["stl"], files["npy"], "-o", tmp_path / "d.npy", "--signed", "--no-progress") == 0
+    (wrote,) = [line for line in capsys.readouterr().err.splitlines() if " wrote " in line]
+    assert wrote.endswith(f"sign {stated[0]})"), wrote
+    # ...and TriangleMesh.signed_distance's own default.
+    mesh = cloud.read_mesh(files["stl"], merge=True)
+    expected = mesh.signed_distance(files["points"], sign=stated[0])
+    assert np.load(tmp_path / "d.npy").tobytes() == mesh.signed_distance(files["points"]).tobytes()
+    assert np.load(tmp_path / "d.npy").tobytes() == expected.tobytes()
+
+
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory):
+    """Two overlapping spheres in one STL file: a closed mesh that does not bound a solid."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    path = tmp_path_factory.mktemp("crossing") / "crossing.stl"
+    trimesh.util.concatenate([sphere, sphere.copy().apply_translation([0.5, 0, 0])]).export(path)
+    return path
+
+
+def _assert_one_warning_line(err):
+    lines = err.splitlines()
+    warned = [line for line in lines if line.startswith("proximity.cloud: warning: this mesh does not bound")]
+    assert warned and warned[0].endswith("sign='auto' or 'winding' are right"), err
+    # Not Python's form: no category, no file and line of proximity's, no source line.
+    python = ("RuntimeWarning", "warnings.warn", ".py:")
+    assert not any(word in line for line in lines for word in python), err
+
+
+def test_warnings_are_one_line_messages_of_the_command(files, crossing, tmp_path, capsys):
+    out = tmp_path / "d.npy"
+    assert _run(crossing, files["npy"], "-o", out, "--sign", "pseudonormal", "--no-progress") == 0
+    _assert_one_warning_line(capsys.readouterr().err)
+
+
+def test_warnings_of_the_commands_own_workers_are_one_line_messages(files, crossing, tmp_path, capfd):
+    out = tmp_path / "d.npy"
+    args = ("--sign", "pseudonormal", "--no-progress", "--workers", "1")
+    assert _run(crossing, files["npy"], "-o", out, *args) == 0
+    _assert_one_warning_line(capfd.readouterr().err)  # the worker's stderr is the command's
+
+
+def test_an_unreadable_stl_is_named_with_trimeshs_reason(tmp_path, files, capsys, monkeypatch):
+    # Neither a binary STL (its header counts faces the file does not hold) nor text:
+    # trimesh tries both, then a text decoder it may not have, which is not the reason.
+    junk = tmp_path / "junk.stl"
+    junk.write_bytes(bytes(range(128, 256)) * 3)
+    monkeypatch.setitem(sys.modules, "charset_normalizer", None)  # as where it is not installed
+    assert _run(junk, files["npy"], "-o", tmp_path / "d.npy") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"proximity.cloud: error: cannot read MESH {str(junk)!r} as a mesh (trimesh: ")
+    assert "Binary STL has incorrect length in header" in err and "UnicodeDecodeError" in err
+    assert "charset_normalizer" not in err and "ImportError" not in err
+
+
 # --- Bad input ----------------------------------------------------------------------------------
 
 

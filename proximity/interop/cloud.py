@@ -19,14 +19,16 @@ with zarr installed).  ``OUT`` is a ``.npy`` file or a ``.zarr`` directory:
 With ``--signed`` the distances are signed, negative inside the mesh (the
 field is then named ``signed_distance``), as
 :meth:`proximity.TriangleMesh.signed_distance` gives them; ``--sign``
-chooses how inside is told from outside: ``pseudonormal`` (the default;
-closed meshes only) or ``winding`` (any mesh, slower), and implies
-``--signed``.
+chooses how inside is told from outside, and implies ``--signed``: ``auto``
+(the default, as that method's: the pseudonormal on a mesh that bounds a
+solid, else the winding number, with a warning), ``pseudonormal`` (closed
+manifold meshes) or ``winding`` (any mesh, slower).
 
 Progress goes to stderr: a bar on a terminal, and where stderr is not one
 (a pipe, a CI log, ``nohup``) a plain line every ten seconds or so; a last
 line sums up the job.  ``--no-progress`` leaves only that line and the
-warnings.
+warnings, each one line ``proximity.cloud: warning: ...`` (those the
+library raises, such as a mesh that does not bound a solid, among them).
 
 The job runs chunk by chunk (``--chunk`` rows at a time), so its memory is
 bounded by the chunk, not by ``N``.  By default it runs in this process, on
@@ -49,12 +51,14 @@ line on stderr, leaving no ``OUT.partial``.
 
 import argparse
 import errno
+import inspect
 import json
 import os
 import shutil
 import signal
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -111,6 +115,19 @@ def _ply_vertices(path):
     return None
 
 
+def _reasons(exc):
+    """Why trimesh could not read a file: the errors of its chain (each raised while
+    handling the one before, as trimesh turns from one reader to the next), first
+    first, but the ImportErrors of the fallbacks it reached for last (a missing text
+    decoder says nothing of the file), unless they are all there is."""
+    chain = []
+    while exc is not None and exc not in chain:
+        chain.append(exc)
+        exc = exc.__cause__ if exc.__cause__ is not None or exc.__suppress_context__ else exc.__context__
+    told = [e for e in chain if not isinstance(e, ImportError)] or chain
+    return "; then ".join(f"{type(e).__name__}: {e}" for e in reversed(told))
+
+
 def read_mesh(path, merge=False):
     """The ``TriangleMesh`` of the mesh file at ``path``.
 
@@ -128,7 +145,7 @@ def read_mesh(path, merge=False):
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds, all meaning "unreadable"
-        raise InputError(f"cannot read MESH {str(path)!r} as a mesh ({type(exc).__name__}: {exc})") from None
+        raise InputError(f"cannot read MESH {str(path)!r} as a mesh (trimesh: {_reasons(exc)})") from None
     faces = getattr(loaded, "faces", None)
     if faces is None or len(faces) == 0:
         raise InputError(f"MESH {str(path)!r} holds no faces (an empty or truncated file, or a point cloud?)")
@@ -523,10 +540,28 @@ def _worker_peak_rss():
     return peak_rss()
 
 
+#: What each ``--sign`` does, for the help.
+SIGN_HELP = {
+    "auto": "the pseudonormal on a mesh that bounds a solid, else the winding number, with a warning",
+    "pseudonormal": "closed manifold meshes",
+    "winding": "any mesh, slower",
+}
+
+
+def default_sign():
+    """The sign of ``--signed`` without ``--sign``: ``TriangleMesh.signed_distance``'s own default."""
+    from ..shapes.mesh import TriangleMesh
+
+    return inspect.signature(TriangleMesh.signed_distance).parameters["sign"].default
+
+
 def parser():
     """The command's argument parser."""
     from ..methods import REGISTRY
     from ..shapes.mesh import SIGNS
+
+    default = default_sign()
+    signs = "; ".join(f"{s} ({'the default: ' if s == default else ''}{SIGN_HELP[s]})" for s in SIGNS)
 
     parser = argparse.ArgumentParser(
         prog=f"python -m {NAME}",
@@ -543,8 +578,7 @@ def parser():
     parser.add_argument(
         "--sign",
         choices=SIGNS,
-        help="how inside is told from outside (implies --signed): pseudonormal (default; closed meshes) "
-        "or winding (any mesh, slower)",
+        help=f"how inside is told from outside (implies --signed): {signs}",
     )
     parser.add_argument("--closest-points", action="store_true", help="also write the closest points")
     parser.add_argument("--faces", action="store_true", help="also write the index of the nearest face")
@@ -572,14 +606,12 @@ def parser():
 
 def parse(argv):
     """The command's arguments, checked."""
-    from ..shapes.mesh import SIGNS
-
     command = parser()
     args = command.parse_args(argv)
     if args.sign is not None:
         args.signed = True
     elif args.signed:
-        args.sign = SIGNS[0]
+        args.sign = default_sign()
     if args.chunk < 1:
         command.error(f"--chunk must be at least 1; got {args.chunk}")
     if args.workers is not None and args.workers < 1:
@@ -620,8 +652,25 @@ def _terminate(signum, frame):
     raise SystemExit(128 + signum)
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one line of the command's own, where Python would print the line of
+    proximity's source that raised it."""
+    print(f"{NAME}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+def _show_warnings_as_lines():
+    """On the workers of a cluster the command started: their warnings as its lines too."""
+    warnings.showwarning = _show_warning
+
+
 def main(argv=None):
     """Run ``python -m proximity.cloud``; returns its exit status."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _main(argv):
     args = parse(argv)
     started = time.perf_counter()
     output = None
@@ -660,6 +709,8 @@ def main(argv=None):
                     n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=":0"
                 )
             client = Client(args.scheduler or cluster)
+            if cluster is not None:  # the command's own workers, whose stderr is its own
+                client.run(_show_warnings_as_lines)
         bar = _progress(len(points), args.progress)
         query_start = time.perf_counter()
         job = (mesh, points, output, args.chunk, args.method, args.threads, bar, args.sign)
