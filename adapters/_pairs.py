@@ -56,7 +56,7 @@ from proximity.shapes.base import Point, Segment, Triangle
 from proximity.shapes.posed import Posed
 from proximity.shapes.rounded import Inflated
 
-from ._base import EPS, Failure, Model, best_method, norm, pow2_scale
+from ._common import EPS, Failure, Model, best_method, norm, pow2_scale
 
 #: Kind of each core type, and of its rounded form.
 _KINDS = {Point: ("point", "sphere"), Segment: ("segment", "capsule"), Triangle: ("triangle", None)}
@@ -320,7 +320,7 @@ _SIDE_FIELDS = {
 
 def closest_points(backend, a, b):
     """:meth:`Backend.closest_points`: validate, ask the backend's ``_pairs``, translate."""
-    from ._base import BackendResult
+    from ._common import BackendResult
 
     for name, value in (("a", a), ("b", b)):
         if not isinstance(value, proximity.Shape):
@@ -445,7 +445,7 @@ def pair_scale(a, b):
 
 def local_frame(direction):
     """Rotations ``(n, 3, 3)`` whose third column is each unit ``direction`` (rows)."""
-    from ._base import plane_frame
+    from ._common import plane_frame
 
     u, v = plane_frame(direction)
     return np.stack([u, v, direction], axis=-1)

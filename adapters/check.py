@@ -18,9 +18,9 @@ import numpy as np
 
 import proximity
 
-from . import NAMES, available, get
-from ._base import INSTALL_HINT
+from ._common import INSTALL_HINT
 from .crosscheck import cross_check
+from .registry import NAMES, available, get
 
 #: ``--frames``: the values of ``rescale`` each library is asked with.
 FRAMES = {"caller": (False,), "rescaled": (True,), "both": (False, True)}

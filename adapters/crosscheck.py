@@ -20,8 +20,10 @@ import numpy as np
 
 import proximity
 
-from ._base import Backend, Failure, Model, best_method, error_scale
+from ._base import Backend, error_scale
+from ._common import Failure, Model, best_method
 from ._pairs import pair_scale
+from .registry import available, get
 
 
 @dataclass(frozen=True)
@@ -320,8 +322,6 @@ def cross_check(shape, points, backends=None, tol=None, *, worst=3, rescale=Fals
     >>> raw.beyond_tolerance > 0, raw.max_relative > 1e-3, rescaled.beyond_tolerance
     (True, True, 0)
     """
-    from . import available, get
-
     names = available() if backends is None else list(backends)
     owned = []
     instances = []

@@ -77,7 +77,8 @@ the caller's coordinates.  fcl reports the faces of both sides' BVH models
 
 import numpy as np
 
-from ._base import PAIR_FRAME, WORLD, Backend, Failure, Raw, import_library, norm, plane_frame, polygon
+from ._base import Backend, Raw
+from ._common import PAIR_FRAME, WORLD, Failure, import_library, norm, plane_frame, polygon
 from ._pairs import PairRaw, segment_frames
 
 #: fcl's answer for a pair it has no distance function for is DBL_MAX.

@@ -107,7 +107,8 @@ import weakref
 
 import numpy as np
 
-from ._base import CALLER, Backend, Failure, Raw, import_library, norm, plane_frame, polygon, pow2_scale
+from ._base import Backend, Raw
+from ._common import CALLER, Failure, import_library, norm, plane_frame, polygon, pow2_scale
 from ._pairs import PairRaw, extent, quaternion, segment_frames
 
 #: Radius of the probe sphere and of the circle's capsules, relative to the

@@ -73,18 +73,8 @@ only, either side: no face is reported.
 
 import numpy as np
 
-from ._base import (
-    CALLER,
-    PAIR_FRAME,
-    WORLD,
-    Backend,
-    Failure,
-    Raw,
-    import_library,
-    norm,
-    plane_frame,
-    pow2_scale,
-)
+from ._base import Backend, Raw
+from ._common import CALLER, PAIR_FRAME, WORLD, Failure, import_library, norm, plane_frame, pow2_scale
 from ._pairs import PairRaw
 
 #: Relative accuracy of ``min_distance_other``, which asks fcl for signed

@@ -21,7 +21,8 @@ import pytest
 import proximity
 from proximity import Circle, Disk, Feature, Triangle, adapters
 from proximity.adapters import Failure
-from proximity.adapters._base import EPS, error_scale, plane_frame, sagitta, segments_for
+from proximity.adapters._base import error_scale
+from proximity.adapters._common import EPS, plane_frame, sagitta, segments_for
 
 LIBRARIES = {"fcl": "fcl", "trimesh": "trimesh", "pybullet": "pybullet"}
 
