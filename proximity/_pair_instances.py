@@ -31,8 +31,8 @@ _FIELDS = ("distance", "sqr_distance", "point_a", "point_b", "feature_a", "featu
 
 def unwrapped(shape):
     """``(scene, transform, radius)`` where ``shape`` is a scene of instances,
-    possibly posed and rounded (``transform`` a 4x4 or None, ``radius`` a
-    float or None); None otherwise."""
+    possibly posed and rounded (``transform`` a 4x4 or None, ``radius`` the
+    radii, of the rounded shape's batch, or None); None otherwise."""
     from .scene import Scene
 
     poses, radius, core = [], None, shape
@@ -41,9 +41,9 @@ def unwrapped(shape):
             poses.append(core)
             core = core.shape
         else:
-            if radius is not None or np.ndim(core.radius) != 0:
+            if radius is not None:
                 return None
-            radius, core = float(core.radius), core.core
+            radius, core = core.radius, core.core
     if type(core) is not Scene or core._instanced is None:
         return None
     from .pair_queries import _pose_of

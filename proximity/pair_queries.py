@@ -62,7 +62,7 @@ class _Side:
         self.batch = shape.batch_shape
         self.dim = shape.dim
         r = self.radius
-        self.rounded = (float(r) != 0.0) if r.size == 1 else bool(np.any(r))
+        self.rounded = (r.item() != 0.0) if r.size == 1 else bool(np.any(r))
 
     def rows(self):
         """The batch's stored rows ``(count, N_PARAMS)``, in C order, and its kinds."""
@@ -595,8 +595,8 @@ def _instances(query, a, b, method, max_distance, pose_b, signed):
     if pose_b is not None:
         b, pose_b = b.transformed(pose_b), None
     cutoff = None if max_distance is None else _check_max_distance(max_distance)
-    other = b if key == "a" else a
-    single = getattr(other, "batch_shape", None) == ()
+    # One pair (a radius array rounding the scene makes a batch): each part prunes with the best so far.
+    single = getattr(a, "batch_shape", None) == () and getattr(b, "batch_shape", None) == ()
 
     def one(x, y, max_distance):
         return query(x, y, method=method, max_distance=max_distance)
