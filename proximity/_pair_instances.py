@@ -19,6 +19,7 @@ search.  Each row of the answer is one part's answer, bit for bit, its
 
 import numpy as np
 
+from ._rounding import total_radius
 from ._validate import freeze_result
 from .inflated import Inflated
 from .posed import Posed
@@ -35,17 +36,17 @@ def unwrapped(shape):
     radii, of the rounded shape's batch, or None); None otherwise."""
     from .scene import Scene
 
-    poses, radius, core = [], None, shape
+    poses, radii, core = [], [], shape
     while isinstance(core, (Posed, Inflated)):
         if isinstance(core, Posed):
             poses.append(core)
             core = core.shape
         else:
-            if radius is not None:
-                return None
-            radius, core = core.radius, core.core
+            radii.append(core.radius)
+            core = core.core
     if type(core) is not Scene or core._instanced is None:
         return None
+    radius = total_radius(radii)
     from .pair_queries import _pose_of
 
     transform = None

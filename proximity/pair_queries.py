@@ -29,7 +29,7 @@ import weakref
 import numpy as np
 
 from . import _lazy, _threads, pairs, primitives
-from ._rounding import surface_points
+from ._rounding import surface_points, total_radius
 from ._validate import broadcast_batch, freeze_result
 from .features import _FEATURES, NONE, VERTEX0
 from .methods import resolve
@@ -79,15 +79,15 @@ def _unposed(shape, name):
     """``(shape, rotation, translation)``: ``shape`` without its pose, or with it where it is
     a batch of hull primitives (their vertices posed); ``rotation`` None where unposed.
 
-    Rounding and posing commute (a rigid motion keeps distances), so a posed rounded
-    shape and a rounded posed one are both the rounded shape, posed."""
+    Rounding and posing commute (a rigid motion keeps distances), so any nesting of
+    posed and rounded views is the core rounded by the sum of the radii, posed."""
     from .inflated import Inflated
     from .posed import Posed, to_world
     from .scene import Scene
     from .shapes import Point, Segment, Triangle
 
     rotation = translation = None
-    radius = None
+    radii = []
     core = shape
     while isinstance(core, (Posed, Inflated)):
         if isinstance(core, Posed):
@@ -97,11 +97,11 @@ def _unposed(shape, name):
                 rotation, translation = rotation @ core.rotation, rotation @ core.translation + translation
             core = core.shape
         else:
-            if radius is not None:
-                break
-            radius, core = core.radius, core.core
+            radii.append(core.radius)
+            core = core.core
     if rotation is None:
         return shape, None, None
+    radius = total_radius(radii)
     if type(core) is Scene and core._instanced is not None:
         raise TypeError(f"{name}: a scene of instances is searched part by part (see _pair_instances)")
     if type(core) in (Triangle, Segment):

@@ -196,6 +196,27 @@ def test_a_radius_of_one_element_is_that_radius_for_a_batch_of_one(query):
         _same_answers(query, one, scalar, others, shape=(1,))
 
 
+@pytest.mark.parametrize("query", [proximity.closest_points, proximity.signed_distance])
+def test_rounding_between_poses_is_the_rounding_of_the_core_posed(query):
+    # Rounding and posing commute: rounded by r1, posed, rounded by r2, posed
+    # and rounded by r3 is the core rounded by (r1 + r2) + r3 (as rounding a
+    # rounded shape adds the radii), then posed.  Quarter turns and integer
+    # shifts compose exactly, so the two answer alike, bit for bit.
+    quarter = np.array([[0.0, -1.0, 0.0, 2.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, -1.0], [0, 0, 0, 1]])
+    shift = _lifted(3.0)
+    cores = [
+        TET,
+        proximity.Scene([TET.transformed(shift), TET]),
+        proximity.Segment([[[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]]),
+    ]
+    others = [proximity.Segment([[3.0, 0.0, 0.0], [3.0, 1.0, 2.0]]), TET.transformed(_lifted(-4.0))]
+    for core in cores:
+        nested = core.inflated(0.1).transformed(quarter).inflated(0.2).transformed(shift).inflated(0.3)
+        flat = core.inflated(0.1).inflated(0.2).inflated(0.3).transformed(quarter).transformed(shift)
+        assert flat.shape.radius == (0.1 + 0.2) + 0.3 != 0.1 + (0.2 + 0.3)  # the order shows
+        _same_answers(query, nested, flat, others)
+
+
 # -- broadcasting and bad input ---------------------------------------------------------
 
 
