@@ -190,11 +190,18 @@ def freeze_fields(state):
 
 
 def cutoff(max_distance):
-    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it."""
+    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it:
+    a real number (or a 0-d array of one), not a bool, a string or an array of many.
+    Every query with a cutoff reads it here, points' and pairs' alike."""
     if max_distance is None:
         return math.inf
-    if isinstance(max_distance, bool) or not isinstance(max_distance, (int, float, np.integer, np.floating)):
-        raise TypeError(f"max_distance must be a number or None; got {type(max_distance).__name__}")
+    number = isinstance(max_distance, (int, float, np.integer, np.floating)) or (
+        isinstance(max_distance, np.ndarray) and max_distance.ndim == 0 and max_distance.dtype.kind in "iuf"
+    )
+    if isinstance(max_distance, bool) or not number:
+        raise TypeError(
+            f"max_distance must be a number or None; got {type(max_distance).__name__} {max_distance!r}"
+        )
     value = float(max_distance)
     if not value >= 0.0:  # NaN as well
         raise ValueError(f"max_distance must be >= 0 (or None); got {max_distance!r}")

@@ -448,11 +448,7 @@ class TriangleMesh(Collection):
         counts = np.asarray(shape)
         if counts.shape != (3,) or counts.dtype.kind not in "iu" or (counts < 1).any():
             raise ValueError(f"shape must be 3 integers >= 1; got {shape!r}")
-        band = None
-        if max_distance is not None:
-            band = float(max_distance)
-            if not band >= 0.0:
-                raise ValueError(f"max_distance must be None or >= 0; got {max_distance!r}")
+        band = None if max_distance is None else cutoff(max_distance)
         from . import _grid
 
         return _grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)

@@ -31,6 +31,7 @@ import numpy as np
 from . import _lazy, _threads, pairs, primitives
 from ._rounding import surface_points, total_radius
 from ._validate import broadcast_batch, freeze_result
+from ._validate import cutoff as _cutoff
 from .features import _FEATURES, NONE, VERTEX0
 from .methods import resolve
 from .results import PairResult, _new_pair
@@ -140,18 +141,6 @@ def _poses(a, b, pose_b, names=("a", "b")):
         return b, a, _pose_of(ra, ta), True, None
     # Both posed: b in a's frame, R_a^T (R_b x + t_b - t_a).
     return a, b, _pose_of(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
-
-
-def _check_max_distance(max_distance):
-    if max_distance is None:
-        return np.inf
-    try:
-        value = float(max_distance)
-    except (TypeError, ValueError):
-        raise ValueError(f"max_distance must be a number >= 0 or None; got {max_distance!r}") from None
-    if not value >= 0.0:
-        raise ValueError(f"max_distance must be >= 0 (not NaN); got {max_distance!r}")
-    return value
 
 
 def _prepare(a, b, method, names=("a", "b")):
@@ -304,7 +293,7 @@ def _answer(a, b, method, max_distance, full, names=("a", "b"), pose_b=None):
     """``(out_shape, sides, flat answer)`` of the pair ``a``, ``b``: ``signed`` (``d - r_a - r_b``)
     and, with ``full``, the rest, witnesses on the surfaces."""
     side_a, side_b, out_shape, method = _prepare(a, b, method, names)
-    cutoff = _check_max_distance(max_distance)
+    cutoff = _cutoff(max_distance)
     pose = _pose_array(pose_b)
     if side_a.collection or side_b.collection or pose is not None:
         out = _collection_answer(side_a, side_b, out_shape, method, full, cutoff, pose)
@@ -594,7 +583,7 @@ def _instances(query, a, b, method, max_distance, pose_b, signed):
         return None
     if pose_b is not None:
         b, pose_b = b.transformed(pose_b), None
-    cutoff = None if max_distance is None else _check_max_distance(max_distance)
+    cutoff = None if max_distance is None else _cutoff(max_distance)
     # One pair (a radius array rounding the scene makes a batch): each part prunes with the best so far.
     single = getattr(a, "batch_shape", None) == () and getattr(b, "batch_shape", None) == ()
 
