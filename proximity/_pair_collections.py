@@ -81,6 +81,10 @@ def closest(sides, method, starts, radii, cutoff, pose, full, names):
     column = [
         primitives.N_PARAMS if s.params.shape[1] > primitives.N_PARAMS else -1 for s in (side_a, side_b)
     ]
+    if n == 0:  # an empty batch against a collection: no kinds of pairs to compile a descent for
+        result = out._asdict()
+        del result["undecided"]
+        return result
     descend = bp.descent_kernel(method, present, pose is not None, column[0], column[1])
     args = (side_a, side_b, pose_array, depth, magnitude, queries, out, full)
     # Queries differ in work by orders of magnitude: handed out one at a time.

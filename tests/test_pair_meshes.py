@@ -279,6 +279,22 @@ def test_certified_scenes_of_spheres_and_capsules_are_faithful_to_the_exact_leas
             assert table[int(getattr(r, f"primitive_{mine}")), index] == least
 
 
+@pytest.mark.parametrize("method", ["robust", "certified"])
+def test_an_empty_batch_against_a_collection_has_empty_answers(method):
+    # Like any batch, of its batch shape: no pair to search, no descent to compile.
+    mesh = proximity.TriangleMesh(*SPHERE)
+    pose = np.eye(4)
+    pose[:3, 3] = [0.0, 0.0, 3.0]
+    empties = [proximity.Segment(np.empty((0, 2, 3))), proximity.Sphere(np.empty((0, 4, 3)), 0.5)]
+    for empty in empties:
+        for other in (mesh, mesh.transformed(pose), proximity.Scene([mesh.transformed(pose)])):
+            for a, b in ((empty, other), (other, empty)):
+                r = proximity.closest_points(a, b, method=method)
+                assert r.distance.shape == empty.batch_shape and r.point_a.shape == empty.batch_shape + (3,)
+                assert proximity.distance(a, b, method=method).shape == empty.batch_shape
+                assert proximity.signed_distance(a, b, method=method).shape == empty.batch_shape
+
+
 def test_certified_overlapping_meshes_stop_at_a_certain_zero():
     a = proximity.TriangleMesh(*SPHERE)
     b = proximity.TriangleMesh(SPHERE[0] + [0.3, 0.1, 0.0], SPHERE[1])
