@@ -206,3 +206,21 @@ def cutoff(max_distance):
     if not value >= 0.0:  # NaN as well
         raise ValueError(f"max_distance must be >= 0 (or None); got {max_distance!r}")
     return value
+
+
+def one_of(value, name, options):
+    """``value``, one of the strings ``options``, or an error naming ``name``: a TypeError
+    where it is not a string (an array would compare element by element), else a ValueError."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a str, one of {options}; got {type(value).__name__} {value!r}")
+    if value not in options:
+        raise ValueError(f"{name} must be one of {options}; got {value!r}")
+    return value
+
+
+def flag(value, name):
+    """``value`` as a bool, or a TypeError naming ``name`` where it is not True or False
+    (a string, None, an array: any of them would pass for one)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False; got {type(value).__name__} {value!r}")
+    return bool(value)

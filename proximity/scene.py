@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import primitives
-from ._collection import BRUTE_FORCE_MAX, Collection
+from ._collection import BROAD_PHASES, BRUTE_FORCE_MAX, Collection
 from ._typing import ArrayLike
-from ._validate import frozen
+from ._validate import frozen, one_of
 from .results import SceneResult
 
 if TYPE_CHECKING:
@@ -118,8 +118,8 @@ class Scene(Collection):
             )
             if any(posed):  # the loose primitives, numbered among the instances'
                 tree = dataclasses.replace(tree, index=_renumbered(tree.index, offsets, posed))
-        elif broad_phase not in ("auto", "brute", "bvh"):
-            raise ValueError(f"broad_phase must be one of ('auto', 'brute', 'bvh'); got {broad_phase!r}")
+        else:
+            one_of(broad_phase, "broad_phase", BROAD_PHASES)
         self._init(
             shapes=tuple(shapes),
             offsets=offsets,

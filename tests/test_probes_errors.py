@@ -1,0 +1,49 @@
+"""Bad values of the options that choose a mode: each refused with a message naming it."""
+
+import numpy as np
+import pytest
+
+import proximity
+
+TET = ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+def _option_calls():
+    mesh = proximity.TriangleMesh(*TET)
+    point = [[0.1, 0.1, 0.1]]
+    segment = proximity.Segment([[0, 0, 0], [1, 0, 0]])
+    return [
+        ("sign", lambda v: mesh.signed_distance(point, sign=v)),
+        ("sign", lambda v: mesh.contains(point, sign=v)),
+        ("sign", lambda v: mesh.signed(point, sign=v)),
+        ("sign", lambda v: mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 2, 2), sign=v)),
+        ("broad_phase", lambda v: proximity.TriangleMesh(*TET, broad_phase=v)),
+        ("broad_phase", lambda v: proximity.Scene([mesh.transformed(np.eye(4))], broad_phase=v)),
+        ("broad_phase", lambda v: proximity.Scene([segment], broad_phase=v)),
+    ]
+
+
+@pytest.mark.parametrize("value", [np.array(["auto", "bvh"]), np.zeros(3), np.empty(0), None, 1, b"auto"])
+def test_a_mode_that_is_not_a_string_is_named_with_what_it_is(value):
+    # An array compared with the names element by element gave NumPy's
+    # "truth value of an array is ambiguous", naming nothing.
+    for name, call in _option_calls():
+        message = rf"{name} must be a str, one of \(.*\); got {type(value).__name__}"
+        with pytest.raises(TypeError, match=message):
+            call(value)
+
+
+def test_a_mode_of_an_unknown_name_lists_the_names():
+    for name, call in _option_calls():
+        with pytest.raises(ValueError, match=rf"{name} must be one of \(.*\); got 'parity'"):
+            call("parity")
+
+
+@pytest.mark.parametrize("value", ["yes", "", None, 1, np.array([True, False])])
+def test_full_is_true_or_false(value):
+    # Anything Python takes for a truth value passed, a string "no" included.
+    mesh = proximity.TriangleMesh(*TET)
+    with pytest.raises(TypeError, match=f"full must be True or False; got {type(value).__name__}"):
+        mesh.winding_number([0.1, 0.1, 0.1], full=value)
+    exact = mesh.winding_number([0.1, 0.1, 0.1], full=True)
+    assert mesh.winding_number([0.1, 0.1, 0.1], full=np.True_).winding == exact.winding == 1.0
