@@ -143,13 +143,17 @@ def _poses(a, b, pose_b, names=("a", "b")):
     return a, b, _pose_of(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
 
 
+def _same_dimension(a, b, names):
+    if a.dim != b.dim:
+        raise ValueError(
+            f"{names[0]} and {names[1]} must live in the same dimension; got {a.dim}D "
+            f"({type(a).__name__}) and {b.dim}D ({type(b).__name__})"
+        )
+
+
 def _prepare(a, b, method, names=("a", "b")):
     side_a, side_b = _Side(a, names[0]), _Side(b, names[1])
-    if side_a.dim != side_b.dim:
-        raise ValueError(
-            f"{names[0]} and {names[1]} must live in the same dimension; got {side_a.dim}D "
-            f"({type(a).__name__}) and {side_b.dim}D ({type(b).__name__})"
-        )
+    _same_dimension(a, b, names)
     out_shape = broadcast_batch(
         [(names[0], side_a.batch), (names[1], side_b.batch)],
         f"the batch dimensions of {names[0]} and {names[1]}",
@@ -581,6 +585,11 @@ def _instances(query, a, b, method, max_distance, pose_b, signed):
     key = "a" if pi.unwrapped(a) is not None else "b" if pi.unwrapped(b) is not None else None
     if key is None:
         return None
+    for name, shape in (("a", a), ("b", b)):
+        if not hasattr(shape, "_rows") or not hasattr(shape, "closest_point"):
+            raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
+    # Checked here, on the arguments: the parts below are posed meshes and scenes, and may swap sides.
+    _same_dimension(a, b, ("a", "b"))
     if pose_b is not None:
         b, pose_b = b.transformed(pose_b), None
     cutoff = None if max_distance is None else _cutoff(max_distance)

@@ -47,3 +47,18 @@ def test_full_is_true_or_false(value):
         mesh.winding_number([0.1, 0.1, 0.1], full=value)
     exact = mesh.winding_number([0.1, 0.1, 0.1], full=True)
     assert mesh.winding_number([0.1, 0.1, 0.1], full=np.True_).winding == exact.winding == 1.0
+
+
+def test_a_pair_of_dimensions_with_a_scene_of_instances_names_the_arguments_in_order():
+    # The scene is searched part by part, its parts swapped to side b: the
+    # message named "b and a" and a part's class for the scene's.
+    instances = proximity.Scene([proximity.TriangleMesh(*TET).transformed(np.eye(4))])
+    flat = proximity.Segment(np.zeros((2, 2)))
+    message = "a and b must live in the same dimension; got {}D \\({}\\) and {}D \\({}\\)"
+    for query in (proximity.closest_points, proximity.distance, proximity.signed_distance):
+        with pytest.raises(ValueError, match=message.format(3, "Scene", 2, "Segment")):
+            query(instances, flat)
+        with pytest.raises(ValueError, match=message.format(2, "Segment", 3, "Scene")):
+            query(flat, instances)
+    with pytest.raises(TypeError, match="b must be a proximity shape; got str"):
+        proximity.closest_points(instances, "mesh")
