@@ -62,3 +62,13 @@ def test_a_pair_of_dimensions_with_a_scene_of_instances_names_the_arguments_in_o
             query(flat, instances)
     with pytest.raises(TypeError, match="b must be a proximity shape; got str"):
         proximity.closest_points(instances, "mesh")
+
+
+@pytest.mark.parametrize("value", ["no", None, 1, np.zeros(3)])
+def test_certified_stats_reset_is_true_or_false(value):
+    # "no" reset the counts; an array raised NumPy's ambiguous truth value.
+    proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]]).distance([0.25, 0.25, 0.0], method="certified")
+    before = proximity.certified_stats()
+    with pytest.raises(TypeError, match=f"reset must be True or False; got {type(value).__name__}"):
+        proximity.certified_stats(reset=value)
+    assert proximity.certified_stats() == before and before["queries"] > 0
