@@ -190,12 +190,37 @@ def freeze_fields(state):
 
 
 def cutoff(max_distance):
-    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it."""
+    """``max_distance`` as a float cutoff (``inf`` for None), or an error naming it:
+    a real number (or a 0-d array of one), not a bool, a string or an array of many.
+    Every query with a cutoff reads it here, points' and pairs' alike."""
     if max_distance is None:
         return math.inf
-    if isinstance(max_distance, bool) or not isinstance(max_distance, (int, float, np.integer, np.floating)):
-        raise TypeError(f"max_distance must be a number or None; got {type(max_distance).__name__}")
+    number = isinstance(max_distance, (int, float, np.integer, np.floating)) or (
+        isinstance(max_distance, np.ndarray) and max_distance.ndim == 0 and max_distance.dtype.kind in "iuf"
+    )
+    if isinstance(max_distance, bool) or not number:
+        raise TypeError(
+            f"max_distance must be a number or None; got {type(max_distance).__name__} {max_distance!r}"
+        )
     value = float(max_distance)
     if not value >= 0.0:  # NaN as well
         raise ValueError(f"max_distance must be >= 0 (or None); got {max_distance!r}")
     return value
+
+
+def one_of(value, name, options):
+    """``value``, one of the strings ``options``, or an error naming ``name``: a TypeError
+    where it is not a string (an array would compare element by element), else a ValueError."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a str, one of {options}; got {type(value).__name__} {value!r}")
+    if value not in options:
+        raise ValueError(f"{name} must be one of {options}; got {value!r}")
+    return value
+
+
+def flag(value, name):
+    """``value`` as a bool, or a TypeError naming ``name`` where it is not True or False
+    (a string, None, an array: any of them would pass for one)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False; got {type(value).__name__} {value!r}")
+    return bool(value)

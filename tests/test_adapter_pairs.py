@@ -499,11 +499,6 @@ def test_backends_in_the_callers_coordinates_answer_unit_pairs_within_their_tole
             assert (r.tolerance <= rescaled.closest_points(*pair).tolerance * 4).all()
 
 
-@pytest.mark.xfail(
-    raises=TypeError,
-    strict=True,
-    reason="proximity.pair.queries._Side converts a one-element radius array with float()",
-)
 def test_one_element_radius_arrays_are_rounded_shapes_of_that_radius(backends):
     tri = Triangle([[[3, 0, 0], [4, 0, 0], [3, 1, 0]]])
     axis = [[[0, 0, 0], [1, 0, 0]]]

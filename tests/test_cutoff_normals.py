@@ -96,6 +96,35 @@ def test_bad_cutoffs_name_the_argument(bad, error):
             shape.distance([[0.0, 0.0, 5.0]], max_distance=bad)
 
 
+@pytest.mark.parametrize(
+    "bad, error", [(-1.0, ValueError), (math.nan, ValueError), ("2", TypeError), (True, TypeError)]
+)
+def test_pair_queries_and_grids_refuse_the_cutoffs_point_queries_refuse(bad, error):
+    # One validation for every cutoff: the pair queries (of primitives, of
+    # meshes, of a scene of instances) and the signed grid name it alike.
+    mesh = _mesh()
+    segment = make("segment")
+    instances = proximity.Scene([mesh.transformed(np.eye(4))])
+    for query in (proximity.closest_points, proximity.distance, proximity.signed_distance):
+        for a, b in ((segment, segment), (mesh, segment), (instances, segment)):
+            with pytest.raises(error, match="max_distance must be"):
+                query(a, b, max_distance=bad)
+    with pytest.raises(error, match="max_distance must be"):
+        mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 2, 2), max_distance=bad)
+
+
+def test_a_cutoff_may_be_a_numpy_number():
+    # NumPy scalars and 0-d arrays are numbers, for points and pairs alike.
+    a = proximity.Segment([[0, 0, 0], [1, 0, 0]])
+    b = proximity.Segment([[0, 0, 1], [1, 0, 1]])
+    for limit in (np.float64(2.0), np.array(2.0), np.int64(2)):
+        assert proximity.distance(a, b, max_distance=limit) == 1.0
+        assert a.distance([0, 0, 1], max_distance=limit) == 1.0
+    assert np.isposinf(proximity.distance(a, b, max_distance=np.array(0.5)))
+    with pytest.raises(TypeError, match=r"max_distance must be a number or None; got ndarray"):
+        a.distance([0, 0, 1], max_distance=np.array([2.0]))
+
+
 def test_rounded_signed_distances_beyond_the_cutoff_are_positive_infinity():
     pill = proximity.Capsule([[0, 0, 0], [0, 0, 4]], 0.5)
     signed = pill.signed_distance([[0, 0, 2], [3, 0, 2], [9, 0, 2]], max_distance=3.0)

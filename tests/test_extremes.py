@@ -12,6 +12,7 @@ import pytest
 
 import proximity
 from proximity.testing import exact
+from proximity.testing.meshes import torus
 
 HALF_SUBNORMAL = mpmath.mpf(2) ** -1075
 METHODS = ("robust", "certified")
@@ -115,3 +116,39 @@ def test_identical_faces_are_stored_once_and_the_lowest_index_wins():
     assert len(mesh._tree.kinds) == 2  # one copy of each distinct face
     r = mesh.closest_point([[0.2, 0.2, -1.0], [0.2, -1.0, 0.5]])
     assert r.face.tolist() == [0, 50_000]
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_a_mesh_of_subnormal_extent_signs_as_the_mesh_scaled_up(closed):
+    # Integer coordinates times 2^-1074 and times 2^-20: each mesh is the
+    # other scaled by 2^1054, exactly, as are the points.  The signs work in
+    # a frame scaled to the mesh's extent, the same for both: the sides and
+    # validity are the same, the winding numbers within their bounds of each
+    # other (the same integers on the closed mesh; the hierarchies, built on
+    # the coordinates as given, differ); the distances, the tiny mesh's
+    # rounded at the subnormal spacing, are the same scaled, within that
+    # rounding and the robust bound.
+    vertices, faces = torus(12, 6)
+    if not closed:
+        faces = faces[: len(faces) - 6]
+    ints = np.round(vertices * 2.0**20)
+    points = np.round(np.random.default_rng(4).uniform(-1.5, 1.5, (300, 3)) * 2.0**20)
+    tiny = proximity.TriangleMesh(np.ldexp(ints, -1074), faces)
+    big = proximity.TriangleMesh(np.ldexp(ints, -20), faces)
+    assert np.ptp(tiny.vertices) < 2.0**-1022
+    p_tiny, p_big = np.ldexp(points, -1074), np.ldexp(points, -20)
+    assert tiny.validity == big.validity
+    w, v = tiny.winding_number(p_tiny), big.winding_number(p_big)
+    np.testing.assert_array_equal(w.inside, v.inside)
+    np.testing.assert_array_equal(w.certain, v.certain)
+    assert (np.abs(w.winding - v.winding) <= w.error + v.error).all()
+    if closed:
+        np.testing.assert_array_equal(w.winding, v.winding)
+    sign = "auto" if closed else "winding"
+    a, b = tiny.signed(p_tiny, sign=sign), big.signed(p_big, sign=sign)
+    np.testing.assert_array_equal(a.contains, b.contains)
+    np.testing.assert_array_equal(a.certain, b.certain)
+    np.testing.assert_array_equal(tiny.contains(p_tiny, sign=sign), b.contains)
+    scaled = np.ldexp(tiny.signed_distance(p_tiny, sign=sign), 1054)
+    limit = 2.0 ** (1054 - 1075) + 16 * 2.0**-52 * 4.0
+    assert np.abs(scaled - big.signed_distance(p_big, sign=sign)).max() <= limit

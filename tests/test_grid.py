@@ -74,6 +74,8 @@ def test_degenerate_grids_and_bad_arguments():
         mesh.sdf_grid([0, 0, 0], [1, np.nan, 1], (2, 2, 2))
     with pytest.raises(ValueError, match="max_distance must be"):
         mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 2, 2), max_distance=-1.0)
+    with pytest.raises(TypeError, match="max_distance must be a number or None; got str 'x'"):
+        mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 2, 2), max_distance="x")
     with pytest.raises(ValueError, match="sign must be one of"):
         mesh.sdf_grid([0, 0, 0], [1, 1, 1], (2, 2, 2), sign="parity")
     with pytest.raises(TypeError, match="keyword-only"):

@@ -280,6 +280,37 @@ def test_instances_share_their_mesh_and_answer_as_the_meshes_built_moved():
         scene.with_poses(np.array(moved[:3]))
 
 
+@pytest.mark.parametrize("loose", [False, True])
+def test_a_posed_scene_of_instances_in_a_scene_answers_as_its_instances_posed(loose):
+    # A posed scene of instances brings its instances, posed by both poses,
+    # and its loose primitives posed by its own: the same bits as those
+    # members posed one by one, its primitives numbered as in the flat scene.
+    vertices, faces = icosphere(1)
+    mesh = proximity.TriangleMesh(vertices, faces)
+    A, B, C = (_pose(40 + k, spread=3.0) for k in range(3))
+    triangle = proximity.Triangle([[0, 0, 4], [1, 0, 4], [0, 1, 5]])
+    last = proximity.Scene([triangle]) if loose else mesh.transformed(B)
+    inner = proximity.Scene([mesh.transformed(A), triangle if loose else mesh.transformed(B)])
+    nested = proximity.Scene([inner.transformed(C), mesh])
+    flat = proximity.Scene([mesh.transformed(A).transformed(C), last.transformed(C), mesh])
+    points = np.random.default_rng(9).normal(size=(500, 3)) * 5
+    a, b = nested.closest_point(points), flat.closest_point(points)
+    for name, value in asdict(b).items():
+        if name != "source":
+            np.testing.assert_array_equal(getattr(a, name), value, err_msg=name)
+    np.testing.assert_array_equal(a.source, np.where(b.source == 2, 1, 0))
+    moved = nested.with_poses(np.array([B]))
+    np.testing.assert_array_equal(
+        moved.distance(points),
+        proximity.Scene([mesh.transformed(A).transformed(B), last.transformed(B), mesh]).distance(points),
+    )
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(nested)).distance(points), b.distance)
+    segments = proximity.Segment(np.random.default_rng(10).normal(size=(20, 2, 3)) * 5)
+    pa, pb = proximity.closest_points(nested, segments), proximity.closest_points(flat, segments)
+    for name in ("distance", "point_a", "point_b", "feature_a", "primitive_a"):
+        np.testing.assert_array_equal(getattr(pa, name), getattr(pb, name), err_msg=name)
+
+
 @pytest.mark.parametrize("skew", [0.0, 1e-10])
 def test_instances_skip_only_instances_that_cannot_hold_the_answer(skew):
     # Each instance answers as its posed view alone (the same moved point),

@@ -220,6 +220,81 @@ def test_rounded_collections_and_max_distance():
     assert r.primitive_a == 1 and r.distance == pytest.approx(float(sphere.distance([0, 0, 1.2])) - 0.1)
 
 
+def _exact_core_distance(a, b):
+    """The exact distance (mpmath) between two cores, each ``(n, 3)`` vertices: a point, a
+    segment or a triangle."""
+    a, b = (np.asarray(x, np.float64).reshape(-1, 3) for x in (a, b))
+    if len(a) > len(b):
+        a, b = b, a
+    if len(a) == 1:
+        if len(b) == 1:
+            sqr = sum((Fraction(x) - Fraction(y)) ** 2 for x, y in zip(a[0], b[0], strict=True))
+            return mpmath.sqrt(exact.to_mpf(sqr))
+        return (exact.segment_distance if len(b) == 2 else exact.triangle_distance)(b, a[0])
+    if len(b) == 2:
+        return exact.segment_segment_closest(a, b).distance
+    return (exact.segment_triangle_closest if len(a) == 2 else exact.triangle_triangle_closest)(a, b).distance
+
+
+def _rounded_primitives(shape):
+    """``[(core vertices (n, 3), radius)]`` of each primitive of a scene or a mesh, in order."""
+    kinds, params = shape._rows()[:2]
+    counts = {p.code: p.vertices for p in proximity.primitives.BY_CODE}
+    radius = params[:, -1] if params.shape[1] > proximity.primitives.N_PARAMS else np.zeros(len(kinds))
+    return [(params[k, : 3 * counts[kinds[k]]].reshape(-1, 3), radius[k]) for k in range(len(kinds))]
+
+
+def test_certified_scenes_of_spheres_and_capsules_are_faithful_to_the_exact_least_pair():
+    # Equal spheres at equal heights over a plane tie, so the certified
+    # search finishes several rows of one pair in Python, each row with its
+    # own radius; the answer is the exact least ``d - r_a - r_b`` faithfully
+    # rounded, at its pair of primitives.
+    balls = proximity.Sphere([[0.0, 0.0, 1.0], [0.5, 0.25, 1.0], [0.25, 0.5, 1.0]], 0.5)
+    pills = proximity.Capsule([[[0.0, 0.0, 2.0], [1.0, 0.0, 2.0]], [[0.0, 1.0, 2.5], [1.0, 1.0, 2.5]]], 0.25)
+    scene = proximity.Scene([balls, pills])
+    plane = [[-2.0, -2.0, 0.0], [4.0, -2.0, 0.0], [-2.0, 4.0, 0.0]]
+    others = [
+        proximity.Triangle(plane),
+        proximity.Segment([[-2.0, 0.0, 0.0], [4.0, 1.0, 0.0]]),
+        proximity.TriangleMesh(SPHERE[0] + [0.2, 0.3, 3.6], SPHERE[1]),
+        proximity.Scene([proximity.Sphere([[0.0, 0.0, -1.0], [0.5, 0.25, -1.0]], 0.5)]),
+    ]
+    for other in others:
+        prims = _rounded_primitives(other) if hasattr(other, "_tree") else [(other.vertices, 0.0)]
+        for a, b, swap in ((scene, other, False), (other, scene, True)):
+            r = proximity.closest_points(a, b, method="certified")
+            signed = proximity.signed_distance(a, b, method="certified")
+            with mpmath.workprec(exact.PREC):
+                table = {
+                    (i, k): _exact_core_distance(core, prim) - exact.to_mpf(Fraction(ra) + Fraction(rb))
+                    for i, (core, ra) in enumerate(_rounded_primitives(scene))
+                    for k, (prim, rb) in enumerate(prims)
+                }
+                least = min(table.values())
+            assert least > 0 and exact.ulps(float(signed), least) < 1.0
+            assert r.distance == signed
+            mine, theirs = ("b", "a") if swap else ("a", "b")
+            field = "face" if hasattr(other, "faces") else "primitive"
+            index = max(int(getattr(r, f"{field}_{theirs}")), 0)  # -1 for a single primitive
+            assert table[int(getattr(r, f"primitive_{mine}")), index] == least
+
+
+@pytest.mark.parametrize("method", ["robust", "certified"])
+def test_an_empty_batch_against_a_collection_has_empty_answers(method):
+    # Like any batch, of its batch shape: no pair to search, no descent to compile.
+    mesh = proximity.TriangleMesh(*SPHERE)
+    pose = np.eye(4)
+    pose[:3, 3] = [0.0, 0.0, 3.0]
+    empties = [proximity.Segment(np.empty((0, 2, 3))), proximity.Sphere(np.empty((0, 4, 3)), 0.5)]
+    for empty in empties:
+        for other in (mesh, mesh.transformed(pose), proximity.Scene([mesh.transformed(pose)])):
+            for a, b in ((empty, other), (other, empty)):
+                r = proximity.closest_points(a, b, method=method)
+                assert r.distance.shape == empty.batch_shape and r.point_a.shape == empty.batch_shape + (3,)
+                assert proximity.distance(a, b, method=method).shape == empty.batch_shape
+                assert proximity.signed_distance(a, b, method=method).shape == empty.batch_shape
+
+
 def test_certified_overlapping_meshes_stop_at_a_certain_zero():
     a = proximity.TriangleMesh(*SPHERE)
     b = proximity.TriangleMesh(SPHERE[0] + [0.3, 0.1, 0.0], SPHERE[1])

@@ -15,6 +15,7 @@ import pytest
 import proximity
 from proximity import Feature
 from proximity.numerics import certified
+from proximity.results import asdict
 from proximity.testing import exact, scenes
 from tests.test_pair_kernels import SPECS, check_certified, check_robust
 
@@ -149,6 +150,72 @@ def test_rounded_triangles_and_spheres():
     deep = proximity.Sphere([0, 0, 0.5], 0.5)
     assert proximity.signed_distance(deep, slab) == -0.25
     assert proximity.distance(deep, slab) == 0.0
+
+
+TET = proximity.TriangleMesh(
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+)
+
+
+def _lifted(z):
+    pose = np.eye(4)
+    pose[2, 3] = z
+    return pose
+
+
+def _same_answers(query, got, want, others, shape=None):
+    """``query`` of ``got`` and of ``want`` against each of ``others``, both ways: the same
+    bits, of ``shape`` where given."""
+    for other in others:
+        for x, y in ((query(got, other), query(want, other)), (query(other, got), query(other, want))):
+            x = asdict(x) if hasattr(x, "point_a") else {"distance": x}
+            y = asdict(y) if hasattr(y, "point_a") else {"distance": y}
+            for name, value in y.items():
+                if shape is not None:
+                    assert np.shape(x[name])[: len(shape)] == shape, name
+                    value = np.reshape(value, np.shape(x[name]))
+                np.testing.assert_array_equal(x[name], value, err_msg=name)
+
+
+@pytest.mark.parametrize("query", [proximity.closest_points, proximity.distance, proximity.signed_distance])
+def test_a_radius_of_one_element_is_that_radius_for_a_batch_of_one(query):
+    # Each rounded shape with radius [r] against its form with radius r:
+    # the same answers, of the batch shape (1,) the radius gives.
+    instances = proximity.Scene([TET.transformed(_lifted(3.0)), TET])
+    capsule = [[[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]]
+    cases = [
+        (proximity.Sphere(np.zeros((1, 3)), [0.5]), proximity.Sphere(np.zeros((1, 3)), 0.5)),
+        (proximity.Capsule(capsule, [0.5]), proximity.Capsule(capsule, 0.5)),
+        (TET.inflated([0.5]), TET.inflated(0.5)),
+        (TET.transformed(_lifted(1.0)).inflated([0.5]), TET.transformed(_lifted(1.0)).inflated(0.5)),
+        (proximity.Scene([TET, proximity.Segment(capsule)]).inflated([0.5]),
+         proximity.Scene([TET, proximity.Segment(capsule)]).inflated(0.5)),
+        (instances.inflated([0.5]), instances.inflated(0.5)),
+    ]  # fmt: skip
+    others = [proximity.Segment([[3.0, 0.0, 0.0], [3.0, 1.0, 2.0]]), proximity.Sphere([0.25, 0.25, 0.5], 0.1)]
+    for one, scalar in cases:
+        _same_answers(query, one, scalar, others, shape=(1,))
+
+
+@pytest.mark.parametrize("query", [proximity.closest_points, proximity.signed_distance])
+def test_rounding_between_poses_is_the_rounding_of_the_core_posed(query):
+    # Rounding and posing commute: rounded by r1, posed, rounded by r2, posed
+    # and rounded by r3 is the core rounded by (r1 + r2) + r3 (as rounding a
+    # rounded shape adds the radii), then posed.  Quarter turns and integer
+    # shifts compose exactly, so the two answer alike, bit for bit.
+    quarter = np.array([[0.0, -1.0, 0.0, 2.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, -1.0], [0, 0, 0, 1]])
+    shift = _lifted(3.0)
+    cores = [
+        TET,
+        proximity.Scene([TET.transformed(shift), TET]),
+        proximity.Segment([[[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]]),
+    ]
+    others = [proximity.Segment([[3.0, 0.0, 0.0], [3.0, 1.0, 2.0]]), TET.transformed(_lifted(-4.0))]
+    for core in cores:
+        nested = core.inflated(0.1).transformed(quarter).inflated(0.2).transformed(shift).inflated(0.3)
+        flat = core.inflated(0.1).inflated(0.2).inflated(0.3).transformed(quarter).transformed(shift)
+        assert flat.shape.radius == (0.1 + 0.2) + 0.3 != 0.1 + (0.2 + 0.3)  # the order shows
+        _same_answers(query, nested, flat, others)
 
 
 # -- broadcasting and bad input ---------------------------------------------------------

@@ -11,6 +11,18 @@ import numpy as np
 from .. import primitives
 
 
+def total_radius(radii):
+    """The radius of a shape rounded by each of ``radii`` in turn (the outermost
+    first, as a chain of rounded and posed views holds them), or None for none:
+    the sum, inner first, as rounding a rounded shape adds the radii
+    (:class:`proximity.Inflated`).  Rounding and posing commute, so a pose
+    between two roundings changes nothing."""
+    total = None
+    for r in reversed(radii):
+        total = r if total is None else total + r
+    return total
+
+
 def certify_difference(e, d, r, exact_rows):
     """``e = d - r`` where it is faithful for the exact ``d* - r`` (``d``
     faithful), else the exact fallback's value; ``exact_rows(flat rows)``

@@ -84,6 +84,10 @@ def closest(sides, method, starts, radii, cutoff, pose, full, names):
     column = [
         primitives.N_PARAMS if s.params.shape[1] > primitives.N_PARAMS else -1 for s in (side_a, side_b)
     ]
+    if n == 0:  # an empty batch against a collection: no kinds of pairs to compile a descent for
+        result = out._asdict()
+        del result["undecided"]
+        return result
     descend = bp.descent_kernel(method, present, pose is not None, column[0], column[1])
     args = (side_a, side_b, pose_array, depth, magnitude, queries, out, full)
     # Queries differ in work by orders of magnitude: handed out one at a time.
@@ -168,12 +172,13 @@ def _resolve(side_a, side_b, present, q, queries, pose, depth, magnitude, column
         ra = queries.radius_a[q] + (rows_a[sel, column[0]] if column[0] >= 0 else 0.0)
         rb = queries.radius_b[q] + (rows_b[sel, column[1]] if column[1] >= 0 else 0.0)
         d = r["distance"]
-        e = _minus_radii(d, np.broadcast_to(ra, d.shape), np.broadcast_to(rb, d.shape), pair,
-                         rows_a[sel], rows_b[sel])  # fmt: skip
+        # Each row's radii: the rows' own (a column) or the query's (one for all of them).
+        ra, rb = np.broadcast_to(ra, d.shape), np.broadcast_to(rb, d.shape)
+        e = _minus_radii(d, ra, rb, pair, rows_a[sel], rows_b[sel])
         for j, i in enumerate(sel):
             if not np.isnan(e[j]):
                 ia, ib = side_a.index[ka[i]], side_b.index[kb[i]]
-                answers.append((float(e[j]), int(ia), int(ib), r, j, int(ka[i]), int(kb[i]), ra, rb))
+                answers.append((float(e[j]), int(ia), int(ib), r, j, int(ka[i]), int(kb[i]), ra[j], rb[j]))
     if not answers:
         return
     e, ia, ib, r, j, row_a, row_b, ra, rb = min(answers, key=lambda t: (t[0], t[1], t[2]))
@@ -190,8 +195,7 @@ def _resolve(side_a, side_b, present, q, queries, pose, depth, magnitude, column
         out.feature_a[q], out.feature_b[q] = r["feature"][j], r["feature_b"][j]
         out.extra_a[q], out.extra_b[q] = r["extra_a"][j], r["extra_b"][j]
         out.index_a[q], out.index_b[q], out.row_a[q], out.row_b[q] = ia, ib, row_a, row_b
-        out.radius_a[q] = np.broadcast_to(ra, (j + 1,))[j]
-        out.radius_b[q] = np.broadcast_to(rb, (j + 1,))[j]
+        out.radius_a[q], out.radius_b[q] = ra, rb
 
 
 def _minus_radii(d, ra, rb, pair, rows_a, rows_b):

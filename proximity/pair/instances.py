@@ -20,6 +20,7 @@ search.  Each row of the answer is one part's answer, bit for bit, its
 import numpy as np
 
 from .._validate import freeze_result
+from ..numerics.rounding import total_radius
 from ..results import pair_result
 from ..shapes.posed import Posed
 from ..shapes.rounded import Inflated
@@ -32,21 +33,21 @@ _FIELDS = ("distance", "sqr_distance", "point_a", "point_b", "feature_a", "featu
 
 def unwrapped(shape):
     """``(scene, transform, radius)`` where ``shape`` is a scene of instances,
-    possibly posed and rounded (``transform`` a 4x4 or None, ``radius`` a
-    float or None); None otherwise."""
+    possibly posed and rounded (``transform`` a 4x4 or None, ``radius`` the
+    radii, of the rounded shape's batch, or None); None otherwise."""
     from ..shapes.scene import Scene
 
-    poses, radius, core = [], None, shape
+    poses, radii, core = [], [], shape
     while isinstance(core, (Posed, Inflated)):
         if isinstance(core, Posed):
             poses.append(core)
             core = core.shape
         else:
-            if radius is not None or np.ndim(core.radius) != 0:
-                return None
-            radius, core = float(core.radius), core.core
+            radii.append(core.radius)
+            core = core.core
     if type(core) is not Scene or core._instanced is None:
         return None
+    radius = total_radius(radii)
     from ..numerics.rigid import pose_matrix
 
     transform = None

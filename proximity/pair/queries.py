@@ -30,10 +30,11 @@ import numpy as np
 
 from .. import primitives
 from .._validate import broadcast_batch, freeze_result
+from .._validate import cutoff as _cutoff
 from ..features import _FEATURES, NONE, VERTEX0
 from ..methods import resolve
 from ..numerics.rigid import pose_matrix
-from ..numerics.rounding import surface_points
+from ..numerics.rounding import surface_points, total_radius
 from ..results import PairResult, pair_result
 from ..runtime import lazy, threads
 from . import table
@@ -65,7 +66,7 @@ class _Side:
         self.batch = shape.batch_shape
         self.dim = shape.dim
         r = self.radius
-        self.rounded = (float(r) != 0.0) if r.size == 1 else bool(np.any(r))
+        self.rounded = (r.item() != 0.0) if r.size == 1 else bool(np.any(r))
 
     def rows(self):
         """The batch's stored rows ``(count, N_PARAMS)``, in C order, and its kinds."""
@@ -82,8 +83,8 @@ def _unposed(shape, name):
     """``(shape, rotation, translation)``: ``shape`` without its pose, or with it where it is
     a batch of hull primitives (their vertices posed); ``rotation`` None where unposed.
 
-    Rounding and posing commute (a rigid motion keeps distances), so a posed rounded
-    shape and a rounded posed one are both the rounded shape, posed."""
+    Rounding and posing commute (a rigid motion keeps distances), so any nesting of
+    posed and rounded views is the core rounded by the sum of the radii, posed."""
     from ..numerics.rigid import to_world
     from ..shapes.base import Point, Segment, Triangle
     from ..shapes.posed import Posed
@@ -91,7 +92,7 @@ def _unposed(shape, name):
     from ..shapes.scene import Scene
 
     rotation = translation = None
-    radius = None
+    radii = []
     core = shape
     while isinstance(core, (Posed, Inflated)):
         if isinstance(core, Posed):
@@ -101,11 +102,11 @@ def _unposed(shape, name):
                 rotation, translation = rotation @ core.rotation, rotation @ core.translation + translation
             core = core.shape
         else:
-            if radius is not None:
-                break
-            radius, core = core.radius, core.core
+            radii.append(core.radius)
+            core = core.core
     if rotation is None:
         return shape, None, None
+    radius = total_radius(radii)
     if type(core) is Scene and core._instanced is not None:
         raise TypeError(f"{name}: a scene of instances is searched part by part (see _pair_instances)")
     if type(core) in (Triangle, Segment):
@@ -140,25 +141,17 @@ def _poses(a, b, pose_b, names=("a", "b")):
     return a, b, pose_matrix(ra.T @ rb, ra.T @ (tb - ta)), False, (ra, ta)
 
 
-def _check_max_distance(max_distance):
-    if max_distance is None:
-        return np.inf
-    try:
-        value = float(max_distance)
-    except (TypeError, ValueError):
-        raise ValueError(f"max_distance must be a number >= 0 or None; got {max_distance!r}") from None
-    if not value >= 0.0:
-        raise ValueError(f"max_distance must be >= 0 (not NaN); got {max_distance!r}")
-    return value
+def _same_dimension(a, b, names):
+    if a.dim != b.dim:
+        raise ValueError(
+            f"{names[0]} and {names[1]} must live in the same dimension; got {a.dim}D "
+            f"({type(a).__name__}) and {b.dim}D ({type(b).__name__})"
+        )
 
 
 def _prepare(a, b, method, names=("a", "b")):
     side_a, side_b = _Side(a, names[0]), _Side(b, names[1])
-    if side_a.dim != side_b.dim:
-        raise ValueError(
-            f"{names[0]} and {names[1]} must live in the same dimension; got {side_a.dim}D "
-            f"({type(a).__name__}) and {side_b.dim}D ({type(b).__name__})"
-        )
+    _same_dimension(a, b, names)
     out_shape = broadcast_batch(
         [(names[0], side_a.batch), (names[1], side_b.batch)],
         f"the batch dimensions of {names[0]} and {names[1]}",
@@ -302,7 +295,7 @@ def _answer(a, b, method, max_distance, full, names=("a", "b"), pose_b=None):
     """``(out_shape, sides, flat answer)`` of the pair ``a``, ``b``: ``signed`` (``d - r_a - r_b``)
     and, with ``full``, the rest, witnesses on the surfaces."""
     side_a, side_b, out_shape, method = _prepare(a, b, method, names)
-    cutoff = _check_max_distance(max_distance)
+    cutoff = _cutoff(max_distance)
     pose = _pose_array(pose_b)
     if side_a.collection or side_b.collection or pose is not None:
         out = _collection_answer(side_a, side_b, out_shape, method, full, cutoff, pose)
@@ -590,11 +583,16 @@ def _instances(query, a, b, method, max_distance, pose_b, signed):
     key = "a" if pi.unwrapped(a) is not None else "b" if pi.unwrapped(b) is not None else None
     if key is None:
         return None
+    for name, shape in (("a", a), ("b", b)):
+        if not hasattr(shape, "_rows") or not hasattr(shape, "closest_point"):
+            raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
+    # Checked here, on the arguments: the parts below are posed meshes and scenes, and may swap sides.
+    _same_dimension(a, b, ("a", "b"))
     if pose_b is not None:
         b, pose_b = b.transformed(pose_b), None
-    cutoff = None if max_distance is None else _check_max_distance(max_distance)
-    other = b if key == "a" else a
-    single = getattr(other, "batch_shape", None) == ()
+    cutoff = None if max_distance is None else _cutoff(max_distance)
+    # One pair (a radius array rounding the scene makes a batch): each part prunes with the best so far.
+    single = getattr(a, "batch_shape", None) == () and getattr(b, "batch_shape", None) == ()
 
     def one(x, y, max_distance):
         return query(x, y, method=method, max_distance=max_distance)

@@ -35,7 +35,9 @@ def stats(reset: bool = False) -> dict[str, int]:
     >>> proximity.certified_stats()
     {'queries': 2, 'exact': 1}
     """
+    from .._validate import flag
+
     out = dict(_STATS)
-    if reset:
+    if flag(reset, "reset"):
         _STATS.update(queries=0, exact=0)
     return out

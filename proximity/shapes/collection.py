@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._typing import ArrayLike, Distances
-from .._validate import as_float64, cutoff, freeze_result, frozen
+from .._validate import as_float64, cutoff, freeze_result, frozen, one_of
 from ..primitives import N_PARAMS
 from ..results import attach
 from ..runtime import lazy, threads
@@ -52,8 +52,7 @@ class Collection(Frozen):
         """``(resolved broad phase, tree)`` for ``n`` primitives, from the
         callables ``build(broadphase)`` (a hierarchy) or ``brute(broadphase)``,
         given the package :mod:`proximity.broadphase`."""
-        if broad_phase not in BROAD_PHASES:
-            raise ValueError(f"broad_phase must be one of {BROAD_PHASES}; got {broad_phase!r}")
+        one_of(broad_phase, "broad_phase", BROAD_PHASES)
         if broad_phase == "auto":
             broad_phase = "brute" if n <= BRUTE_FORCE_MAX else "bvh"
         with threads.kernel():

@@ -24,10 +24,12 @@ from .._validate import (
     as_float64,
     as_index_array,
     cutoff,
+    flag,
     freeze_fields,
     freeze_result,
     frozen,
     frozen_float64,
+    one_of,
     require_finite,
 )
 from ..primitives import N_PARAMS, TRIANGLE
@@ -436,8 +438,7 @@ class TriangleMesh(Collection):
                 "TriangleMesh.sdf_grid() takes three positional arguments, lower, upper and shape; "
                 f"the others are keyword-only: got {len(args)} more"
             )
-        if sign not in SIGNS:
-            raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
+        one_of(sign, "sign", SIGNS)
         low = as_float64(lower, "lower", "(3,)")
         high = as_float64(upper, "upper", "(3,)")
         for name, corner in (("lower", low), ("upper", high)):
@@ -448,11 +449,7 @@ class TriangleMesh(Collection):
         counts = np.asarray(shape)
         if counts.shape != (3,) or counts.dtype.kind not in "iu" or (counts < 1).any():
             raise ValueError(f"shape must be 3 integers >= 1; got {shape!r}")
-        band = None
-        if max_distance is not None:
-            band = float(max_distance)
-            if not band >= 0.0:
-                raise ValueError(f"max_distance must be None or >= 0; got {max_distance!r}")
+        band = None if max_distance is None else cutoff(max_distance)
         from ..signs import grid
 
         return grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)
@@ -509,7 +506,7 @@ class TriangleMesh(Collection):
             raise keyword_only(self, "winding_number", args)
         pts = _points(points)
         out_shape = pts.shape[:-1]
-        w, e, integral = self._winding_numbers(pts.reshape(-1, 3), full=bool(full))
+        w, e, integral = self._winding_numbers(pts.reshape(-1, 3), full=flag(full, "full"))
         inside, certain, w, e = winding.sides(w, e, integral)
         return winding.WindingResult(
             winding=w.reshape(out_shape),
@@ -566,8 +563,7 @@ class TriangleMesh(Collection):
         """``(output shape, distances (n,), inside (n,), certain (n,))`` for
         :meth:`signed_distance`; rows beyond ``max_distance`` at an infinite
         distance, their side from the winding number."""
-        if sign not in SIGNS:
-            raise ValueError(f"sign must be one of {SIGNS}; got {sign!r}")
+        one_of(sign, "sign", SIGNS)
         cut = cutoff(max_distance)
         _signed = lazy.load("proximity.signs.signed")
 

@@ -21,9 +21,9 @@ import numpy as np
 
 from .. import primitives
 from .._typing import ArrayLike
-from .._validate import frozen
+from .._validate import frozen, one_of
 from ..results import SceneResult
-from .collection import BRUTE_FORCE_MAX, Collection
+from .collection import BROAD_PHASES, BRUTE_FORCE_MAX, Collection
 
 if TYPE_CHECKING:
     from .base import Shape
@@ -118,8 +118,8 @@ class Scene(Collection):
             )
             if any(posed):  # the loose primitives, numbered among the instances'
                 tree = dataclasses.replace(tree, index=_renumbered(tree.index, offsets, posed))
-        elif broad_phase not in ("auto", "brute", "bvh"):
-            raise ValueError(f"broad_phase must be one of ('auto', 'brute', 'bvh'); got {broad_phase!r}")
+        else:
+            one_of(broad_phase, "broad_phase", BROAD_PHASES)
         self._init(
             shapes=tuple(shapes),
             offsets=offsets,
@@ -132,23 +132,44 @@ class Scene(Collection):
 
     def _derive(self):
         """The instances: the posed meshes and scenes, and the loose primitives
-        as one more, unmoved (None where there are no posed ones)."""
+        as one more, unmoved (None where there are no posed ones).  A posed
+        scene of instances brings its own instances, each posed by the view's
+        pose after its own: its tree holds only its loose primitives."""
         posed = [_instance(shape) for shape in self.shapes]
         if not any(posed):
             return {"_instanced": None}
-        prototypes, which = [], []
-        for shape, inst in zip(self.shapes, posed, strict=True):
-            if inst:
-                known = [k for k, p in enumerate(prototypes) if p is shape.shape]
-                which.append(known[0] if known else len(prototypes))
-                if not known:
-                    prototypes.append(shape.shape)
+        trees, which, offset, view, inner = [], [], [], [], []
+
+        def number(tree):
+            known = [k for k, t in enumerate(trees) if t is tree]
+            if not known:
+                trees.append(tree)
+            return known[0] if known else len(trees) - 1
+
         jobs = [j for j, inst in enumerate(posed) if inst]
+        for k, j in enumerate(jobs):
+            prototype, start = self.shapes[j].shape, int(self.offsets[j])
+            nested = getattr(prototype, "_instanced", None)
+            if nested is None:
+                which.append(number(prototype._tree))
+                offset.append(start)
+                view.append(k)
+                inner.append(None)
+                continue
+            members = nested.arrays[False]
+            loose = len(members.prototype) - 1 if nested.loose_tree else -1
+            for i, tree in enumerate(members.prototype):
+                which.append(number(nested.trees[tree]))
+                offset.append(start + int(members.offset[i]))
+                view.append(k)
+                inner.append(None if i == loose else (members.rotation[i], members.translation[i]))
         rotation = np.array([self.shapes[j].rotation for j in jobs])
         translation = np.array([self.shapes[j].translation for j in jobs])
         own = getattr(self, "_tree", None)  # unpickling: restored after the rest
-        trees = tuple(p._tree for p in prototypes) + (() if own is None else (own,))
-        instances = _Instances(trees, np.array(which, np.int64), self.offsets[jobs], own is not None)
+        trees = tuple(trees) + (() if own is None else (own,))
+        instances = _Instances(
+            trees, np.array(which, np.int64), np.array(offset, np.int64), own is not None, view, inner
+        )
         return {"_instanced": instances.posed(rotation, translation)}
 
     def with_poses(self, transforms: ArrayLike) -> Scene:
@@ -244,20 +265,28 @@ class Scene(Collection):
 
 class _Instances:
     """A scene's instances: the prototypes' trees (the loose primitives'
-    last, where there are any), each posed view's prototype and first
-    primitive, and their poses' arrays for the search, made per pose."""
+    last, where there are any), each instance's prototype and first
+    primitive, the posed view it belongs to and its pose within that view
+    (None: the view's own), and their poses' arrays for the search, made
+    per pose of the views."""
 
-    def __init__(self, trees, prototype, offset, loose_tree):
+    def __init__(self, trees, prototype, offset, loose_tree, view, inner):
         self.trees, self.prototype, self.offset, self.loose_tree = trees, prototype, offset, loose_tree
+        self.view, self.inner = view, inner
         self.arrays = None
 
     def posed(self, rotation, translation):
-        """The instances at these poses (those of the posed views, in order)."""
+        """The instances with the posed views at these poses (in order)."""
         from ..broadphase.instances import instance_arrays
 
-        out = _Instances(self.trees, self.prototype, self.offset, self.loose_tree)
+        out = _Instances(self.trees, self.prototype, self.offset, self.loose_tree, self.view, self.inner)
         prototype, offset = self.prototype, self.offset
         rotation, translation = np.asarray(rotation).reshape(-1, 3, 3), np.asarray(translation).reshape(-1, 3)
+        rotation, translation = rotation[self.view], translation[self.view]
+        for i, pose in enumerate(self.inner):
+            if pose is not None:  # X -> R (R' X + t') + t, composed as a posed view composes it
+                r, t = rotation[i], translation[i]
+                rotation[i], translation[i] = r @ pose[0], r @ pose[1] + t
         if self.loose_tree:
             prototype = np.append(prototype, len(self.trees) - 1)
             offset = np.append(offset, 0)

@@ -107,7 +107,7 @@ def _crossing(tri, j, a0, a1, a2, p0, p1, p2):
 
 
 @kernel(parallel=True)
-def _crossings(boxes, child, count, tri, weight, points, order, scale, axis, w_out):
+def _crossings(boxes, child, count, tri, weight, points, order, scale, more, axis, w_out):
     """The signed crossings of each point's ray; NaN where a crossing is undecided or the
     point is not finite."""
     n = points.shape[0]
@@ -117,7 +117,9 @@ def _crossings(boxes, child, count, tri, weight, points, order, scale, axis, w_o
         stack = np.empty(m + 1, np.int64)
         for o in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
             i = order[o]
-            p0, p1, p2 = points[i, a0] * scale, points[i, a1] * scale, points[i, a2] * scale
+            p0 = points[i, a0] * scale * more
+            p1 = points[i, a1] * scale * more
+            p2 = points[i, a2] * scale * more
             if not (math.isfinite(p0) and math.isfinite(p1) and math.isfinite(p2)):
                 w_out[i] = math.nan
                 continue
@@ -169,5 +171,5 @@ def crossings(hierarchy, points):
         with threads.kernel():
             warm()
             _crossings(h.boxes, h.child, h.count, h.triangles, h.weight, points, _visiting_order(points),
-                       h.scale, h.axis, w)  # fmt: skip
+                       *h.scale, h.axis, w)  # fmt: skip
     return w

@@ -133,8 +133,9 @@ class Hierarchy:
     boxes : ndarray of float64, shape ``(m, 6)``
         Each node's box (low, high corners) over its faces of nonzero
         weight, in the scaled frame; empty (``inf``, ``-inf``) where none.
-    scale : float
-        The power of two the coordinates are multiplied by.
+    scale : tuple of float
+        The powers of two the coordinates are multiplied by, one after the
+        other (the second is 1 but for a mesh of subnormal extent).
     integral : bool
         Whether the mesh is closed by position (see
         :mod:`proximity.signs.validity`), where the winding number is an integer
@@ -152,7 +153,7 @@ class Hierarchy:
     triangles: np.ndarray
     weight: np.ndarray
     boxes: np.ndarray
-    scale: float
+    scale: tuple
     integral: bool
     axis: int
 
@@ -226,14 +227,18 @@ def _weights(vertices, faces, index, triangles):
 
 
 def _scale_of(vertices):
-    """A power of two that brings the mesh's extent near 1, keeping coordinates below ``2^500``."""
+    """``(s, t)``: powers of two whose product brings the mesh's extent near 1, keeping
+    coordinates below ``2^500``.  ``t`` is 1 but for a mesh of subnormal extent, whose
+    product is past ``2^1023``: multiplying by ``s`` and then by ``t`` is multiplying by the
+    product, exactly (the powers are positive), or overflows where that does."""
     extent = float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
     largest = float(np.max(np.abs(vertices)))
     if extent == 0.0:
         extent = largest if largest > 0.0 else 1.0
     exponent = -math.frexp(extent)[1]
     exponent = min(exponent, 500 - math.frexp(largest)[1]) if largest > 0.0 else exponent
-    return math.ldexp(1.0, exponent)
+    first = min(exponent, 1023)
+    return math.ldexp(1.0, first), math.ldexp(1.0, exponent - first)
 
 
 def build(mesh):
@@ -241,7 +246,7 @@ def build(mesh):
     tree = _tree_of(mesh)
     child, count, index, params = _topology(tree)
     scale = _scale_of(mesh.vertices)
-    triangles = np.ascontiguousarray(params * scale)
+    triangles = np.ascontiguousarray(params * scale[0] * scale[1])
     weight = _weights(mesh.vertices, mesh.faces, index, triangles)
     with threads.kernel():
         nodes = _moments(child, count, triangles, weight)
@@ -621,7 +626,7 @@ def _winding_point(nodes, child, count, tri, weight, px, py, pz, full, rule, sta
 
 
 @kernel(parallel=True)
-def _winding_kernel(nodes, child, count, tri, weight, points, order, scale, full, rule, w_out, e_out):
+def _winding_kernel(nodes, child, count, tri, weight, points, order, scale, more, full, rule, w_out, e_out):
     n = points.shape[0]
     m = child.shape[0]
     for block in prange((n + BLOCK - 1) // BLOCK):
@@ -632,7 +637,7 @@ def _winding_kernel(nodes, child, count, tri, weight, points, order, scale, full
         for o in range(block * BLOCK, min(n, (block + 1) * BLOCK)):
             i = order[o]
             x, y, z = points[i, 0], points[i, 1], points[i, 2]
-            px, py, pz = x * scale, y * scale, z * scale
+            px, py, pz = x * scale * more, y * scale * more, z * scale * more
             if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
                 w_out[i], e_out[i] = math.nan, math.nan
             elif not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
@@ -660,7 +665,7 @@ def numbers(hierarchy, points, full=False, rule=NONZERO):
     if len(points):
         with threads.kernel():
             _winding_kernel(
-                h.nodes, h.child, h.count, h.triangles, h.weight, points, _visiting_order(points), h.scale,
+                h.nodes, h.child, h.count, h.triangles, h.weight, points, _visiting_order(points), *h.scale,
                 bool(full), int(rule), w, e,
             )
     return w, e
