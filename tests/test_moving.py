@@ -111,7 +111,7 @@ def test_points_move_with_two_temporaries_of_one_coordinate(move):
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert peak <= 40 * len(points) + 4096, peak / len(points)
+    assert peak <= 41 * len(points), peak / len(points)  # and a megabyte of whatever else runs
 
 
 def _answers(shape, points):
