@@ -115,6 +115,16 @@ def _round_frames():
     disk.round_frames(one, one, one[0, :1], np.empty((1, 3)))
 
 
+def _sides():
+    """The exact sides of points on a face's plane, which the normals there take."""
+    from .numerics.normals import plane_sides
+
+    params = np.zeros((2, primitives.N_PARAMS))
+    params[0, 3], params[0, 7] = 1.0, 1.0  # the triangle (0, 0, 0), (1, 0, 0), (0, 1, 0)
+    params[1, 5] = params[1, 8] = params[1, 9] = 1.0  # the unit disk of the z = 0 plane
+    plane_sides(np.array([0, 1], np.int8), params, np.array([[0.25, 0.25, 0.0], [0.5, 0.0, 0.0]]))
+
+
 def compile_all(methods=None, log=sys.stdout):
     """Compile the kernels of ``methods`` (default: every method) and of the broad phase.
 
@@ -135,6 +145,7 @@ def compile_all(methods=None, log=sys.stdout):
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
     jobs.append(("mesh: the signs of the signed distance", _winding))
     jobs.append(("circles and disks: unit normals of large batches", _round_frames))
+    jobs.append(("normals: the exact sides of points on a face's plane", _sides))
     done = {}
     for k, (description, job) in enumerate(jobs, 1):
         start = time.perf_counter()

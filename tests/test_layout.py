@@ -89,10 +89,11 @@ def test_no_import_circles():
 #: The package's parts from the bottom up: each may import only the parts before it, and itself.
 #: A part is a folder, or a module at the root (``""``: the package's ``__init__.py``).
 ORDER = (
-    ("features", "methods", "_typing", "_validate", "results"),  # the vocabulary
+    ("features", "methods", "_typing", "_validate"),  # the vocabulary
     ("runtime",),
     ("primitives",),  # the registry of kinds of primitive
     ("numerics",),
+    ("results",),
     ("point",),
     ("broadphase",),
     ("signs",),

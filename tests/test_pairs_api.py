@@ -69,8 +69,9 @@ def test_a_triangle_against_a_segment_is_the_segment_against_the_triangle(method
         proximity.closest_points(seg, tri, method=method),
         proximity.closest_points(tri, seg, method=method),
     )
-    for name, value in vars(ab.swapped()).items():
+    for name, value in asdict(ab.swapped()).items():
         np.testing.assert_array_equal(value, getattr(ba, name), err_msg=name)
+    np.testing.assert_array_equal(ab.swapped().normal, ba.normal)
     one = proximity.closest_points(tri[0], seg[0], method=method)
     np.testing.assert_array_equal(one.point_a, ab.point_b[0])
     assert one.feature_b == ab.feature_a[0] and one.parameter_b == ab.parameter_a[0]

@@ -175,3 +175,10 @@ def test_the_compile_line_names_the_hierarchy_for_meshes():
 
     what, seconds = _notice.describe(build.build_tree)
     assert what.startswith("kernels of meshes and scenes") and seconds
+
+
+def test_the_compile_line_names_the_predicates_for_normals_at_a_face():
+    from proximity import _notice, _orient
+
+    what, seconds = _notice.describe(_orient.plane_sides)
+    assert what.startswith("kernels of exact orientation predicates (of normals at a face") and seconds

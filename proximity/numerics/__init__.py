@@ -14,7 +14,10 @@
 :mod:`.rounding`
     Rounded primitives: ``d - r`` certified where it cancels, points of the rounded surface.
 :mod:`.rigid`
-    Rigid transforms: their check, and points moved into and out of a pose.
+    Rigid transforms: their check, and points and vectors moved into and out of a pose.
+:mod:`.normals`
+    The normal at a closest point: a face's turned to the point's side (decided exactly), the
+    pseudonormal within rounding of an edge or a vertex, and the normals of pair results.
 
 It may import :mod:`proximity.runtime`, the root's vocabulary and the primitive registry
 (:mod:`proximity.primitives`); it calls no query of a shape.

@@ -31,6 +31,10 @@ DOUBT = 2
 TINY = 2.0**-300
 ERR3 = 8.0e-16  # > (7 + 56 u) u = 7.77e-16
 ERR2 = 3.4e-16  # > (3 + 16 u) u = 3.33e-16
+# A dot product of a difference: the difference, the three products and the two sums each
+# round once, so the error is at most (4 + 16 u) u = 4.44e-16 of the sum of the products'
+# magnitudes.
+ERR_DOT = 4.5e-16
 
 
 @inline
@@ -193,6 +197,57 @@ def orient2d(ax, ay, bx, by, cx, cy):
     if _tiny(bax) or _tiny(bay) or _tiny(cax) or _tiny(cay):
         return DOUBT
     return _orient2d_exact(ax, ay, bx, by, cx, cy)
+
+
+@part
+def _dot_exact(px, py, pz, cx, cy, cz, nx, ny, nz):
+    total = np.empty(12)
+    size = 0
+    for axis in range(3):
+        if axis == 0:
+            d, n = _diff(px, cx), nx
+        elif axis == 1:
+            d, n = _diff(py, cy), ny
+        else:
+            d, n = _diff(pz, cz), nz
+        term = np.empty(4)
+        nt = _scale(d, 2, n, term)
+        merged = np.empty(size + nt)
+        size = _add(total, size, term, nt, merged)
+        for i in range(size):
+            total[i] = merged[i]
+    return _sign_of(total, size)
+
+
+@part
+def dot_sign(px, py, pz, cx, cy, cz, nx, ny, nz):
+    """Sign of ``(p - c) . n``: -1, 0, 1, or :data:`DOUBT`."""
+    dx, dy, dz = px - cx, py - cy, pz - cz
+    a, b, c = dx * nx, dy * ny, dz * nz
+    det = a + b + c
+    bound = ERR_DOT * (abs(a) + abs(b) + abs(c))
+    if det > bound:
+        return 1
+    if -det > bound:
+        return -1
+    if _tiny(dx) or _tiny(dy) or _tiny(dz) or _tiny(nx) or _tiny(ny) or _tiny(nz):
+        return DOUBT
+    return _dot_exact(px, py, pz, cx, cy, cz, nx, ny, nz)
+
+
+@kernel()
+def plane_sides(planar, rows, out):
+    """Per row, the side of a point of a plane: ``out[i]`` the sign of ``(P - V0) . ((V1 - V0) x
+    (V2 - V0))`` where ``planar[i]`` is 0 (``rows[i]`` holds ``V0, V1, V2, P``), of ``(P - C) .
+    N`` where it is 1 (``C, N, P``), or :data:`DOUBT`."""
+    for i in range(len(out)):
+        r = rows[i]
+        if planar[i] == 0:
+            # orient3d(V0, V1, V2, P) is the sign of (V0 - P) . ((V1 - P) x (V2 - P)), the opposite.
+            s = orient3d(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11])
+            out[i] = s if s == DOUBT else -s
+        else:
+            out[i] = dot_sign(r[6], r[7], r[8], r[0], r[1], r[2], r[3], r[4], r[5])
 
 
 def orient3d_fraction(a, b, c, d):

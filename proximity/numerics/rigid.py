@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import as_float64, frozen
 
-__all__ = ["RIGID_TOLERANCE", "pose_matrix", "rigid", "to_local", "to_world"]
+__all__ = ["RIGID_TOLERANCE", "pose_matrix", "rigid", "rotate", "to_local", "to_world"]
 
 #: The largest ``max |R^T R - I|`` of a transform accepted as rigid.
 RIGID_TOLERANCE = 1e-9
@@ -107,6 +107,16 @@ def _rigid_one(m):
         return None
     r = np.array(rows[:3])[:, :3]
     return frozen(np.ascontiguousarray(r), new=True), frozen(np.array([x, y, z]), new=True)
+
+
+def rotate(vectors, rotation):
+    """``R v`` of ``(..., 3)`` vectors, summed in a fixed order (:func:`to_world` without the
+    translation): each row's bits are its own, whatever the batch."""
+    v = np.asarray(vectors, dtype=np.float64)
+    x = v[..., 0] * rotation[0, 0] + v[..., 1] * rotation[0, 1] + v[..., 2] * rotation[0, 2]
+    y = v[..., 0] * rotation[1, 0] + v[..., 1] * rotation[1, 1] + v[..., 2] * rotation[1, 2]
+    z = v[..., 0] * rotation[2, 0] + v[..., 1] * rotation[2, 1] + v[..., 2] * rotation[2, 2]
+    return np.stack([x, y, z], axis=-1)
 
 
 def pose_matrix(rotation, translation):

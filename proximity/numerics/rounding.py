@@ -8,7 +8,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from .. import primitives
+from .normals import planar, plane_sides, surface_directions
 
 
 def total_radius(radii):
@@ -85,8 +85,14 @@ def surface_points(p, c, d, r, rows_of):
     rows = np.flatnonzero(lost.reshape(-1))
     if len(rows):
         flat_p, flat_c = p.reshape(-1, dim)[rows], c.reshape(-1, dim)[rows]
-        u = surface_directions(*rows_of(rows))[:, :dim]
-        side = np.where(np.einsum("ij,ij->i", flat_p - flat_c, u) < 0, -1.0, 1.0)
+        kinds, params = rows_of(rows)
+        u = surface_directions(kinds, params)[:, :dim]
+        # A plane's side exactly (as the core's normal takes it: the two agree), the
+        # side of u that P - c rounds to for the rest.
+        side = plane_sides(kinds, params, _to_3d(flat_p)).astype(np.float64)
+        loose = ~planar(kinds)
+        side[loose] = np.where(np.einsum("ij,ij->i", flat_p[loose] - flat_c[loose], u[loose]) < 0, -1.0, 1.0)
+        side[side == 0] = 1.0
         point = np.array(point, copy=True)
         radius = np.broadcast_to(r, d.shape).reshape(-1)[rows]
         point.reshape(-1, dim)[rows] = flat_c + (radius * side)[:, None] * u
@@ -131,53 +137,25 @@ def spindle_points(point, normal, d, r, circle, result):
     return point, normal
 
 
-def surface_directions(kinds, params):
-    """A unit vector normal to each primitive at every point of it, ``(n, 3)``:
-    along which a point on the primitive reaches the rounded surface.
-
-    A triangle's plane normal; a segment's (or a zero-area triangle's
-    longest edge's) perpendicular with the smallest component along the
-    coordinate axis least aligned with it; a point's ``+z``; a disk's and a
-    circle's axis.
-    """
-    out = np.zeros((len(kinds), 3))
-    out[:, 2] = 1.0
-    for p in primitives.BY_CODE:
-        rows = np.flatnonzero(kinds == p.code)
-        if len(rows) == 0:
-            continue
-        q = params[rows]
-        if p.axis is not None:
-            n = q[:, p.axis : p.axis + 3]
-        elif p.vertices >= 2:
-            v = q[:, : 3 * p.vertices].reshape(-1, p.vertices, 3)
-            # Differences in units of their largest (so that no product underflows or overflows).
-            v = v - v[:, :1]
-            size = np.max(np.abs(v), axis=(1, 2), keepdims=True)
-            v = v / np.where(size > 0, size, 1.0)
-            edges = v - np.roll(v, 1, axis=1)
-            longest = edges[np.arange(len(v)), np.argmax(np.linalg.norm(edges, axis=2), axis=1)]
-            n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]) if p.vertices == 3 else np.zeros_like(longest)
-            flat = np.linalg.norm(n, axis=1) == 0
-            axis = np.eye(3)[np.argmin(np.abs(longest), axis=1)]
-            n = np.where(flat[:, None], np.cross(longest, axis), n)
-        else:
-            continue
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        good = (length[:, 0] > 0) & np.isfinite(length[:, 0])
-        out[rows[good]] = n[good] / length[good]
-    return out
-
-
-
-def outward(surface, core, radius, fallback):
+def outward(surface, core, radius, fallback, face):
     """The outward unit normal of a rounded surface at ``surface``, a point
     ``radius`` from its core's closest point ``core``: ``(surface - core) / r``,
-    normalised; ``fallback`` (the core's normals) where the radius is 0."""
+    normalised; ``fallback`` (the core's normals) where the radius is 0 and
+    where the core's closest point is on a face (``face``, boolean): there
+    the surface is the face's plane moved by ``r``, whose normal is the
+    face's, towards the point (the core's normal, as the point query gives
+    it), and ``surface - core`` holds the rounding of ``core`` besides."""
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         v = surface - core
         scale = np.max(np.abs(v), axis=-1, keepdims=True)
         v = v / np.where(scale > 0, scale, 1.0)
         n = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    r = np.broadcast_to(radius, n.shape[:-1])[..., None]
-    return np.where(r > 0, n, fallback)
+    r = np.broadcast_to(radius, n.shape[:-1])
+    keep = (r == 0) | np.broadcast_to(face, n.shape[:-1])
+    return np.where(keep[..., None], fallback, n)
+
+
+def _to_3d(points):
+    if points.shape[-1] == 3:
+        return points
+    return np.concatenate([points, np.zeros(points.shape[:-1] + (3 - points.shape[-1],))], axis=-1)

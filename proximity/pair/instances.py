@@ -136,12 +136,36 @@ def _merged(best, got, key):
         old, new = np.asarray(getattr(best, name)), np.asarray(getattr(got, name))
         mask = take.reshape(take.shape + (1,) * (old.ndim - take.ndim))
         fields[name] = np.where(mask, new, old)
-    return _with(best, fields)
+    return _with(best, fields, _Merged(best, got, take))
 
 
-def _with(result, fields):
+class _Merged:
+    """The normals of a row-by-row choice between two answers (``chosen``: ``got``'s rows)."""
+
+    __slots__ = ("best", "got", "chosen")
+
+    def __init__(self, best, got, chosen):
+        self.best, self.got, self.chosen = best, got, chosen
+
+    def normal(self):
+        mask = self.chosen[..., None]
+        return np.where(mask, np.asarray(self.got.normal), np.asarray(self.best.normal))
+
+    def take(self, index):
+        return _Merged(self.best[index], self.got[index], self.chosen[index])
+
+    def negated(self):
+        return _Merged(self.best.swapped(), self.got.swapped(), self.chosen)
+
+
+def _with(result, fields, normals=None):
+    """``result`` with ``fields`` replaced, its normals ``normals`` (a source, see
+    :attr:`~proximity.results.PairResult.normal`) or, without, its own."""
     values = {name: np.asarray(getattr(result, name)) for name in _FIELDS}
     values.update(fields)
     shape = np.shape(values["distance"])
     flat = {name: np.asarray(v).reshape((-1,) + np.shape(v)[len(shape) :]) for name, v in values.items()}
-    return pair_result(flat, shape)
+    out = pair_result(flat, shape, normals)
+    if normals is None:
+        out.__dict__.update({k: v for k, v in result.__dict__.items() if k in ("_pair", "_normal")})
+    return out

@@ -33,6 +33,7 @@ from .._validate import broadcast_batch, freeze_result
 from .._validate import cutoff as _cutoff
 from ..features import _FEATURES, NONE, VERTEX0
 from ..methods import resolve
+from ..numerics.normals import PairNormals
 from ..numerics.rigid import pose_matrix
 from ..numerics.rounding import surface_points, total_radius
 from ..results import PairResult, pair_result
@@ -418,6 +419,17 @@ def _surface(side, other_point, out, key, out_shape, pose_b):
         return surface_points(other_point, c, d, r, rows_of)
 
 
+# -- normals ----------------------------------------------------------------------------
+
+
+def _elements(side, out, key, out_shape):
+    """Each row's element of ``side``: its face or primitive, or its member of the batch."""
+    if side.collection:
+        return np.asarray(out[f"index_{key}"])
+    count = int(np.prod(side.core.batch_shape, dtype=np.int64))
+    return np.broadcast_to(np.arange(count).reshape(side.core.batch_shape), out_shape).reshape(-1)
+
+
 # -- the fast path: one pair of single 3D segments or triangles ---------------------------
 
 _fast = {}  # (type of a, type of b, method name) -> _Fast, or False where there is none
@@ -465,7 +477,7 @@ class _Fast:
         row.setflags(False)
         return row
 
-    def result(self, row):
+    def result(self, row, a, b):
         result = _new(PairResult)
         fields = result.__dict__
         fields["distance"] = row[1]
@@ -481,7 +493,13 @@ class _Fast:
         fields["barycentric_b"] = _NAN3 if segment_b else row[extra_b]
         fields["face_a"] = fields["face_b"] = fields["primitive_a"] = fields["primitive_b"] = _MINUS1
         fields["source_a"] = fields["source_b"] = _MINUS1
+        fields["_pair"] = (self, row, a, b)  # for its normal: self.normals(row, a, b) when asked
         return result
+
+    def normals(self, row, a, b):
+        """The :class:`PairNormals` of the answer ``row`` of ``a`` and ``b``."""
+        (point_a, feature_a, _, _), (point_b, feature_b, _, _) = self.sides
+        return PairNormals(a, b, row[point_a], row[point_b], row[1], row[feature_a], row[feature_b], 0, 0)
 
 
 def _fast_for(a, b, method):
@@ -610,7 +628,7 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
     if max_distance is None and pose_b is None:
         fast = _fast_for(a, b, method)
         if fast is not None:
-            return fast.result(fast.run(a, b))
+            return fast.result(fast.run(a, b), a, b)
     found = _instances(closest_points, a, b, method, max_distance, pose_b, False)
     if found is not None:
         return found
@@ -652,7 +670,13 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
 
         for key in ("point_a", "point_b"):
             values[key] = to_world(values[key], *back)
-    result = pair_result(values, out_shape)
+    pose = _pose_array(pose_b)
+    rows = [out["point_a"], out["point_b"], np.where(found, out["distance"], np.nan), out["feature_a"],
+            out["feature_b"], _elements(side_a, out, "a", out_shape), _elements(side_b, out, "b", out_shape)]
+    rows = [np.asarray(value).reshape(out_shape + np.shape(value)[1:]) for value in rows]
+    pose = None if pose is None else (pose[:, :3], pose[:, 3])
+    normals = PairNormals(side_a.core, side_b.core, *rows, pose=pose, back=back, dim=side_a.dim)
+    result = pair_result(values, out_shape, normals)
     return result.swapped() if swap else result
 
 

@@ -39,6 +39,10 @@ _BROAD_PHASE = (
     "a few seconds, about 5.5 s for a first hierarchy and its first search",
 )
 _SIGNS = ("the winding number of signed distances", "about 1 s")
+# The exact predicates, compiled on their own first (proximity.numerics.orient.warm), for the
+# normals of points within rounding of a face (about 4 s with their sides' loop) and
+# the signs' checks and ray crossings.
+_PREDICATES = ("exact orientation predicates (of normals at a face, of the signs' checks)", "a few seconds")
 _SINGLE = ("one-point queries", "about 1 s")
 _BATCH = ("batch queries", "about 2 to 5 s")
 
@@ -67,6 +71,8 @@ def describe(func):
         what, seconds = _BROAD_PHASE
     elif module == "proximity.signs.signed":
         what, seconds = _SIGNS
+    elif module == "proximity.numerics.orient":
+        what, seconds = _PREDICATES
     elif name.startswith("_single"):
         what, seconds = _SINGLE
     else:

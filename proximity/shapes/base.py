@@ -23,6 +23,7 @@ from .._validate import (
     frozen_float64,
     require_finite,
 )
+from ..features import EDGE01, EDGE20, VERTEX0, VERTEX2
 from ..methods import DEFAULT, REGISTRY, resolve
 from ..primitives import CIRCLE, DISK, N_PARAMS, POINT, SEGMENT, TRIANGLE
 from ..results import (
@@ -360,16 +361,24 @@ class _Facade(Frozen):
         members = np.arange(count).reshape(self.batch_shape) if self.batch_shape else None
         return attach(self._result(**fields), as_float64(points, "points", ""), members, self)
 
-    def _surface_normals(self, result, rows, members):
-        """The shape's normals at the closest points of rows ``rows`` (on the
-        shape), asked of batch members ``members`` (None: the shape is one)."""
-        kinds, params = self._rows()
-        m = np.zeros(len(rows), np.int64) if members is None else members
-        if self.dim == 2:
-            return _normals_2d(self._corners if hasattr(self, "_corners") else 0, params[m])
-        from ..numerics.rounding import surface_directions
+    def _elements(self, result, members):
+        """The batch member each row of ``result`` asked (``members``; 0 where the shape is one)."""
+        return np.zeros((), np.int64) if members is None else members
 
-        return surface_directions(kinds[m], params[m])
+    def _feature_rows(self, index):
+        """``(kinds, params)`` of batch members ``index``, as a collection stores them."""
+        kinds, params = self._rows()
+        return kinds[index], params[index]
+
+    def _feature_normals(self, index, feature, points):
+        """The normals of batch members ``index`` at closest points on their
+        ``feature`` to ``points`` (``(n, 3)``): see :attr:`Result.normal`."""
+        kinds, params = self._feature_rows(index)
+        if self.dim == 2:
+            return _normals_2d(getattr(self, "_corners", 0), params, feature)
+        from ..numerics.normals import feature_normals
+
+        return feature_normals(kinds, params, feature, points)
 
 
 class _Hull(_Facade):
@@ -660,17 +669,43 @@ class Disk(_Round):
     _is_disk = True
 
 
-def _normals_2d(corners, params):
-    """Normals of 2D hulls (embedded in ``z = 0``) at points on them: a
-    segment's perpendicular in the plane; none (NaN) for a triangle or a
-    point, which have no direction there."""
+def _normals_2d(corners, params, feature):
+    """Normals of 2D hulls (embedded in ``z = 0``) at points on their
+    ``feature``, in the plane: a segment's perpendicular; a triangle's
+    outward edge normal on an edge, the sum of its two edges' at a vertex
+    (normalised), and NaN inside, as for a point, which have no direction
+    there."""
     out = np.full((len(params), 3), np.nan)
-    if corners == 2:
-        e = params[:, 3:5] - params[:, 0:2]
-        e = e / np.max(np.abs(e), axis=1, keepdims=True)
-        n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1, keepdims=True)
-        out[:, :2] = np.where(np.isfinite(n), n, np.nan)
-    return out
+    if corners < 2:
+        return out
+    v = params[:, : 3 * corners].reshape(-1, corners, 3)[:, :, :2]
+    v = v - v[:, :1]
+    size = np.max(np.abs(v), axis=(1, 2), keepdims=True)
+    v = v / np.where(size > 0, size, 1.0)  # in units of the largest: no product under- or overflows
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if corners == 2:
+            e = v[:, 1] - v[:, 0]
+            out[:, :2] = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1, keepdims=True)
+        else:
+            # Edge k runs from vertex k to k + 1 (EDGE01, EDGE12, EDGE20); outward is to its
+            # right on a counterclockwise triangle, to its left on a clockwise one.
+            e = np.roll(v, -1, axis=1) - v
+            area = e[:, 0, 0] * e[:, 1, 1] - e[:, 0, 1] * e[:, 1, 0]
+            turn = np.where(area < 0, -1.0, 1.0)[:, None, None]
+            edge = turn * np.stack([e[:, :, 1], -e[:, :, 0]], axis=2)
+            edge = edge / np.linalg.norm(edge, axis=2, keepdims=True)
+            k = np.asarray(feature).astype(np.intp)
+            rows = np.arange(len(params))
+            on_edge = (k >= EDGE01) & (k <= EDGE20)
+            at_vertex = (k >= VERTEX0) & (k <= VERTEX2)
+            n = np.full((len(params), 2), np.nan)
+            n[on_edge] = edge[rows[on_edge], k[on_edge] - EDGE01]
+            both = edge[rows[at_vertex], k[at_vertex]] + edge[rows[at_vertex], (k[at_vertex] + 2) % 3]
+            n[at_vertex] = both / np.linalg.norm(both, axis=1, keepdims=True)
+            out[:, :2] = n
+    out[:, 2] = 0.0
+    out[~np.isfinite(out[:, :2]).all(axis=1)] = np.nan
+    return out + 0.0  # -0.0 from the perpendiculars' negations shown as 0.0
 
 
 def _rows(primitive, params):

@@ -14,6 +14,8 @@ import numpy as np
 
 from .._typing import ArrayLike, Distances
 from .._validate import as_float64, cutoff, freeze_result, frozen, one_of
+from ..features import FACE
+from ..numerics.normals import normals_at
 from ..primitives import N_PARAMS
 from ..results import attach
 from ..runtime import lazy, threads
@@ -147,7 +149,7 @@ class Collection(Frozen):
         """The search's answers for rounded primitives (signed ``d - r``) as a
         collection's: the distance ``max(d - r, 0)``, the signed one kept as
         ``signed_distance``, and closest points moved to the rounded surface."""
-        from ..numerics.rounding import outward, surface_directions, surface_points
+        from ..numerics.rounding import outward, surface_points
 
         signed = out["distance"]
         distance = np.maximum(signed, 0.0) + 0.0
@@ -164,12 +166,11 @@ class Collection(Frozen):
         on_core = out["point"]
         out["point"] = surface_points(points, on_core, core, radius, rows_of)
         out["sqr_distance"] = distance * distance
-        # The normals, outwards on the rounded surfaces (the cores' directions where unrounded).
-        fallback = surface_directions(kinds, params)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            away = (points - out["point"]) / distance[:, None]
-        fallback = np.where((distance > 0)[:, None], away, np.where(found[:, None], fallback, np.nan))
-        out["normal"] = outward(out["point"], on_core, radius, fallback)
+        # The normals, outwards on the rounded surfaces; the cores' (as their point queries
+        # give them) where unrounded and where the core's closest point is on a face.
+        feature = out["feature"]
+        fallback = normals_at(points, on_core, core, feature, np.where(found, index, 0), self)
+        out["normal"] = outward(out["point"], on_core, radius, fallback, feature == FACE)
 
     def inflated(self, radius: float) -> Inflated:
         """The points within ``radius`` of the collection's surface: a thick
@@ -262,14 +263,22 @@ class Collection(Frozen):
             result.__dict__["_normal"] = freeze_result(normal.reshape(out_shape + (3,)))
         return result
 
-    def _surface_normals(self, result, rows, members):
-        """The normals at the closest points of rows ``rows`` (on the
-        collection): its primitives' (:func:`proximity.numerics.rounding.surface_directions`)."""
-        from ..numerics.rounding import surface_directions
+    def _elements(self, result, members):
+        """The nearest face or primitive of each row of ``result``."""
+        return self._nearest_index(result)
 
-        index = self._nearest_index(result).reshape(-1)[rows]
+    def _feature_rows(self, index):
+        """``(kinds, params)`` of faces or primitives ``index``, as the tree stores them."""
+        return self._primitives(index)
+
+    def _feature_normals(self, index, feature, points):
+        """The normals of faces or primitives ``index`` at closest points on
+        their ``feature`` to ``points``: their primitives'
+        (:func:`proximity.numerics.normals.feature_normals`)."""
+        from ..numerics.normals import feature_normals
+
         kinds, params = self._primitives(index)
-        return surface_directions(kinds, params)
+        return feature_normals(kinds, params[:, :N_PARAMS], feature, points)
 
     def signed_distance(
         self,

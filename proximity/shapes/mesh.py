@@ -32,8 +32,10 @@ from .._validate import (
     one_of,
     require_finite,
 )
+from ..features import FACE
 from ..primitives import N_PARAMS, TRIANGLE
-from ..results import MeshResult, _frozen, format_repr
+from ..results import MeshResult, format_repr
+from ..results.base import _frozen
 from ..runtime import lazy, pool, threads
 from .base import DEFAULT_METHOD, keyword_only
 from .collection import Collection
@@ -714,20 +716,28 @@ class TriangleMesh(Collection):
     def _kind_codes(self):
         return np.full(len(self.faces), TRIANGLE.code, np.int8)
 
-    def _surface_normals(self, result, rows, members):
-        """The normals at the closest points of rows ``rows`` (on the mesh):
-        the angle-weighted pseudonormal of the closest face, edge or vertex
-        where the mesh is closed, else the face's normal."""
-        face = np.asarray(result.face).reshape(-1)[rows]
-        feature = np.asarray(result.feature).reshape(-1)[rows]
+    def _feature_normals(self, index, feature, points):
+        """The normals of faces ``index`` at closest points on their
+        ``feature`` to ``points``: at a face, its normal towards the point;
+        on an edge or a vertex, the angle-weighted pseudonormal where the
+        mesh is closed, else the face's normal (see :attr:`Result.normal`)."""
+        normal = super()._feature_normals(index, feature, points)
+        rest = np.flatnonzero(np.asarray(feature) != FACE)
+        if len(rest) == 0:
+            return normal
         signs = self._normals
         if signs is None:
             signs = lazy.load("proximity.signs.signed").Signs(self.vertices, self.faces)
             object.__setattr__(self, "_normals", signs)  # a cache: the mesh does not change
-        if not signs.closed:
-            return super()._surface_normals(result, rows, members)
-        table_rows, _ = lazy.load("proximity.signs.signed").feature_rows(signs, self.faces, face, feature)
-        return signs.table[table_rows, :3]
+        if signs.closed:
+            signed = lazy.load("proximity.signs.signed")
+            table_rows, _ = signed.feature_rows(signs, self.faces, index[rest], np.asarray(feature)[rest])
+            pseudo = signs.table[table_rows, :3]
+            # Where a degenerate face leaves the pseudonormal undefined, the face's normal stays.
+            length = np.linalg.norm(pseudo, axis=1)
+            good = np.isfinite(length) & (length > 0.5)
+            normal[rest[good]] = pseudo[good]
+        return normal
 
     def _primitives(self, index):
         """``(kinds, params)`` of faces ``index``, as the tree stores them."""

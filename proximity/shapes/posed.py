@@ -25,6 +25,7 @@ vertices ``R V + t`` round), so within one ulp plus ``(3 eps + e_R) |P - t|``.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -32,8 +33,8 @@ import numpy as np
 
 from .._typing import ArrayLike, Bools, Distances, Floats, Transform
 from .._validate import as_float64, freeze_result, frozen
-from ..numerics.rigid import RIGID_TOLERANCE, rigid, to_local, to_world
-from ..results import asdict, attach, format_repr
+from ..numerics.rigid import RIGID_TOLERANCE, rigid, rotate, to_local, to_world
+from ..results import asdict, attach_frame, format_repr, posed_normals
 from .base import DEFAULT_METHOD, VIEWS, Frozen, keyword_only
 
 if TYPE_CHECKING:
@@ -228,35 +229,48 @@ class Posed(Frozen):
         if args:
             raise keyword_only(self, "closest_point", args)
         p = self._points(points)
-        made = {}  # the shape's result type, and the batch members its rows asked
+        whole = self.batch_shape != () or math.prod(p.shape[:-1]) <= CHUNK
+        kept = {}  # the shape's result's type; with one part, the result itself
 
         def answer(local):
             core = self.shape.closest_point(local, method=method, max_distance=max_distance)
-            made.update(type=type(core), members=core.__dict__.get("_query", (None, None, None))[1])
+            kept["type"] = type(core)
+            if whole:
+                kept["core"] = core
             fields = asdict(core)
             fields["point"] = to_world(np.asarray(core.point), self.rotation, self.translation)
-            if "_normal" in core.__dict__:
-                fields["_normal"] = np.asarray(core.normal)  # rotated below, once
             return fields
 
         fields = self._each(p, answer)
-        normal = fields.pop("_normal", None)
-        result = made["type"](**fields)
-        if normal is not None:
-            # One product over the whole batch: its bits (a BLAS kernel's) may depend on its size.
-            result.__dict__["_normal"] = freeze_result(normal @ self.rotation.T)
-        else:
-            attach(result, p, made["members"], self)
-        return result
+        result = kept["type"](**fields)
+        if whole:
+            # One part: its normals are the shape's, from the moved point and the shape's
+            # closest point (in the world, the two differ by the rounding of both moves
+            # besides), turned to the world; the moved point is within rounding of the world's
+            # coordinates.
+            normals = functools.partial(posed_normals, kept["core"], self.rotation, p, self.translation)
+            return attach_frame(result, normals)
+        # Several parts: the shape's results are not kept (their memory is what the parts
+        # save), so that the normals, when asked, ask each part again.
+        return attach_frame(result, functools.partial(self._part_normals, p, method, max_distance))
 
-    def _surface_normals(self, result, rows, members):
-        """The shape's normals at rows ``rows`` (on it), rotated to the world."""
-        points = np.broadcast_to(np.asarray(result.__dict__["_query"][0]), np.shape(result.point))
-        # Moved with the query's bits: a point moved otherwise may round off the surface.
-        local = to_local(points.reshape(-1, 3)[rows], self.rotation, self.translation)
-        shape = self.shape if members is None else self.shape[members]
-        normal = np.asarray(shape.closest_point(local).normal).reshape(-1, 3)
-        return normal @ self.rotation.T
+    def _part_normals(self, p, method, max_distance):
+        """The normals of a batch answered a part at a time, each part asked again (the same
+        bits as the whole batch's: every step of a row's normal is the row's own)."""
+        flat = p.reshape(-1, 3)
+        out = np.empty(flat.shape)
+        for lo in range(0, len(flat), CHUNK):
+            part = flat[lo : lo + CHUNK]
+            local = to_local(part, self.rotation, self.translation)
+            core = self.shape.closest_point(local, method=method, max_distance=max_distance)
+            out[lo : lo + len(part)] = posed_normals(core, self.rotation, part, self.translation)
+        return out.reshape(p.shape)
+
+    def _feature_normals(self, index, feature, points):
+        """The shape's normals on elements ``index`` (see :attr:`Result.normal`), for
+        world points ``points``: computed in the shape's frame, turned to the world."""
+        local = to_local(np.asarray(points, dtype=np.float64), self.rotation, self.translation)
+        return rotate(self.shape._feature_normals(index, feature, local), self.rotation)
 
     def _rows(self):
         """The shape's rows, moved to the world (see :func:`proximity.primitives.transform_rows`)."""

@@ -40,6 +40,7 @@ import numpy as np
 from .. import primitives
 from .._typing import ArrayLike, Bools, Distances, Floats
 from .._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
+from ..features import FACE
 from ..numerics.rounding import certify_difference, outward, spindle_points, surface_points
 from ..results import asdict, beyond, format_repr
 from .base import DEFAULT_METHOD, VIEWS, Circle, Frozen, Point, Segment, check_method, keyword_only
@@ -232,8 +233,10 @@ class Inflated(Frozen):
         r = np.broadcast_to(self.radius, shape)
         rows_of = lambda rows: _primitive_arrays(self._exact_rows(core, points, shape, rows))  # noqa: E731
         point = surface_points(p, c, d, r, rows_of)
-        # Its normals: the rounded surface's, outwards (along P - point where P is outside).
-        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape))
+        # Its normals: the rounded surface's, outwards (along P - point where P is outside);
+        # the core's where the core's closest point is on a face.
+        face = np.broadcast_to(np.asarray(core.feature), shape) == FACE
+        normal = outward(point, c, r, np.broadcast_to(np.asarray(core.normal), point.shape), face)
         if isinstance(self.core, Circle):
             point, normal = spindle_points(point, normal, d, r, self.core, core)
         distance = np.maximum(e, 0.0) + 0.0

@@ -237,6 +237,26 @@ class Scene(Collection):
     def _kind_codes(self):
         return self._kinds
 
+    def _feature_normals(self, index, feature, points):
+        """The normals of primitives ``index`` at closest points on their
+        ``feature`` to ``points``: each shape's own where it has them (a
+        mesh's pseudonormals; a posed view's, computed in its frame), else
+        the primitive's (see :attr:`proximity.Result.normal`)."""
+        from .posed import Posed
+
+        index, feature = np.asarray(index), np.asarray(feature)
+        normal = np.empty((len(index), 3))
+        source = np.searchsorted(self.offsets, index, side="right") - 1
+        own = np.array([isinstance(shape, (Posed, Collection)) for shape in self.shapes])
+        loose = np.flatnonzero(~own[source])
+        if len(loose):
+            normal[loose] = super()._feature_normals(index[loose], feature[loose], points[loose])
+        for j in np.unique(source[own[source]]):
+            rows = np.flatnonzero(source == j)
+            local = index[rows] - self.offsets[j]
+            normal[rows] = self.shapes[j]._feature_normals(local, feature[rows], points[rows])
+        return normal
+
     def _result(self, fields):
         index = fields.pop("index")
         extra = fields.pop("extra")

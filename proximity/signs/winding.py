@@ -92,7 +92,7 @@ import numpy as np
 from numba import prange
 
 from .._validate import freeze_fields
-from ..results import _frozen, format_repr
+from ..results.base import _frozen, format_repr
 from ..runtime import threads
 from ..runtime.jit import inline, kernel
 
