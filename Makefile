@@ -46,7 +46,8 @@ test: $(STAMP)
 
 # The oldest Numba that pyproject.toml accepts, in an environment of its own
 # (with the NumPy that Numba version takes): every path of every shape must
-# answer with the bits of the pinned Numba in .venv.
+# answer with the bits of the pinned Numba in .venv.  Both runs compile into
+# caches of their own, so that the job can run beside `make test`.
 NUMBA_FLOOR := $(shell sed -n 's/.*"numba>=\([0-9.]*\),.*/\1/p' pyproject.toml)
 FLOOR := .venv-numba-floor
 
@@ -54,7 +55,7 @@ numba-floor: $(STAMP)
 	rm -rf $(FLOOR)
 	$(PYTHON) -m venv $(FLOOR)
 	$(FLOOR)/bin/python -m pip install --quiet -e . "numba==$(NUMBA_FLOOR).*"
-	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
+	NUMBA_CACHE_DIR=$(FLOOR)/pinned-cache $(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
 	NUMBA_CACHE_DIR=$(FLOOR)/cache $(FLOOR)/bin/python -m proximity.testing.smoke $(FLOOR)/floor.npz \
 		--compare $(FLOOR)/pinned.npz
 
