@@ -74,6 +74,8 @@ sys.meta_path.append(_MovedModules())
 
 from ._typing import ArrayLike, Distances  # noqa: E402
 from ._validate import keyword_only_signature  # noqa: E402
+from .pair import queries as _pairs  # noqa: E402
+from .pair.fast import closest_route as _closest_route  # noqa: E402
 from .results import (  # noqa: E402
     CircleResult,
     DiskResult,
@@ -276,14 +278,8 @@ def distance(
             f"distance(shape, points, method={args[0]!r})"
         )
     if type(points) in _SHAPE_TYPES or hasattr(points, "_rows") and hasattr(points, "batch_shape"):
-        return _pair_queries().distance(shape, points, method=method, max_distance=max_distance)
+        return _pairs.distance(shape, points, method=method, max_distance=max_distance)
     return shape.distance(points, method=method, max_distance=max_distance)
-
-
-def _pair_queries():
-    from .pair import queries as pair_queries
-
-    return pair_queries
 
 
 @keyword_only_signature
@@ -362,7 +358,13 @@ def closest_points(
             "closest_points() takes two positional arguments, a and b; method is keyword-only: "
             f"closest_points(a, b, method={args[0]!r})"
         )
-    return _pair_queries().closest_points(a, b, method=method, max_distance=max_distance)
+    if max_distance is None:  # one pair of single primitives: its fast path, resolved once per types
+        closest = _closest_route(a, b, method)
+        if closest is not None:
+            result = closest(a, b)
+            if result is not None:
+                return result
+    return _pairs.closest_points(a, b, method=method, max_distance=max_distance)
 
 
 @keyword_only_signature
@@ -393,7 +395,7 @@ def signed_distance(
             "signed_distance() takes two positional arguments, a and b; method is keyword-only: "
             f"signed_distance(a, b, method={args[0]!r})"
         )
-    return _pair_queries().signed_distance(a, b, method=method, max_distance=max_distance)
+    return _pairs.signed_distance(a, b, method=method, max_distance=max_distance)
 
 
 @keyword_only_signature

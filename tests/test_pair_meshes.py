@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 
 import proximity
+from proximity.pair import fast as pair_fast
 from proximity.pair import queries as pair_queries
+from proximity.results import asdict
 from proximity.testing import exact, meshes
 
 EPS = 2.0**-52
@@ -353,13 +355,22 @@ def test_posed_views_are_searched_in_place(method):
 def test_the_distance_between_meshes_takes_a_shorter_path_to_the_same_bits(method):
     rng = np.random.default_rng(12)
     sphere, torus = proximity.TriangleMesh(*SPHERE), proximity.TriangleMesh(*TORUS)
-    assert pair_queries._mesh_pair(sphere, torus, method) is not None
+    assert pair_fast.mesh_pair(sphere, torus, method) is not None
     for gap in (0.5, 1e-3, -0.02):
         pose = _pose(rng, gap)
         for b in (torus, torus.transformed(pose)):
             fast = proximity.distance(sphere, b, method=method)
             general = proximity.distance(sphere, b, method=method, max_distance=np.inf)  # the general path
             assert type(fast) is type(general) and fast.tobytes() == general.tobytes()
+            # closest_points too: every field, its type and the normal.
+            fast = proximity.closest_points(sphere, b, method=method)
+            general = proximity.closest_points(sphere, b, method=method, max_distance=np.inf)
+            for name, value in asdict(general).items():
+                mine = getattr(fast, name)
+                assert type(mine) is type(value), name
+                assert np.asarray(mine).tobytes() == np.asarray(value).tobytes(), name
+                assert not isinstance(mine, np.ndarray) or not mine.flags.writeable, name
+            assert fast.normal.tobytes() == general.normal.tobytes()
 
 
 @pytest.mark.parametrize("method", ["robust", "certified"])

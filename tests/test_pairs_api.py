@@ -300,3 +300,40 @@ def test_the_distance_of_points_to_a_shape_still_works():
     tri = proximity.Triangle([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     assert proximity.distance(tri, [0.25, 0.25, 2.0]) == 2.0
     assert proximity.distance(tri, [[0.25, 0.25, 2.0]]).tolist() == [2.0]
+
+
+@pytest.mark.parametrize("kinds", [(2, 2), (2, 3), (3, 2), (3, 3)])
+def test_single_rounded_pairs_answer_with_the_batchs_bits(kinds):
+    """One rounded segment or triangle against another (the fast path, resolved once per
+    pair of types) answers with the bits of the same pair in a batch of two (the general
+    path): distances, signed distances, witnesses on the surfaces, features, parameters
+    and normals; radii 0 and positive, apart, overlapping and with crossing cores."""
+    rng = np.random.default_rng(41)
+    ka, kb = kinds
+    for k in range(60):
+        va, vb = rng.normal(size=(ka, 3)), rng.normal(size=(kb, 3)) + rng.uniform(0, 3, 3)
+        ra, rb = (0.0 if k % 7 == 0 else rng.uniform(0.01, 1.5)), rng.uniform(0.0, 1.5)
+        a = CLASSES[ka](va).inflated(ra)
+        b = CLASSES[kb](vb).inflated(rb)
+        batch_a = CLASSES[ka](np.stack([va, va])).inflated(ra)
+        batch_b = CLASSES[kb](np.stack([vb, vb])).inflated(rb)
+        one, both = proximity.closest_points(a, b), proximity.closest_points(batch_a, batch_b)
+        for name, value in asdict(one).items():
+            np.testing.assert_array_equal(value, getattr(both, name)[0], err_msg=name)
+            assert type(value) is type(getattr(both[0], name)), name
+        np.testing.assert_array_equal(one.normal, both.normal[0])
+        assert proximity.distance(a, b) == both.distance[0]
+        signed = proximity.signed_distance(a, b)
+        assert signed == proximity.signed_distance(batch_a, batch_b)[0] and type(signed) is np.float64
+
+
+def test_capsules_answer_a_single_pair_at_the_cost_of_their_kernel():
+    """A pair of capsules takes the segments' fast path: no general-path step runs."""
+    a = proximity.Capsule([[0, 0, 0], [1, 0, 0]], 0.1)
+    b = proximity.Capsule([[0, 1, 0.5], [1, 2, 0.3]], 0.2)
+    from proximity.pair import queries
+
+    assert queries.fast_for(a, b, "robust") is not None
+    r = proximity.closest_points(a, b)
+    assert float(r.distance) == pytest.approx(float(r.sqr_distance) ** 0.5)
+    assert np.linalg.norm(r.point_b - r.point_a) == pytest.approx(float(r.distance))

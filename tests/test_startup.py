@@ -178,7 +178,8 @@ def test_the_compile_line_names_the_hierarchy_for_meshes():
 
 
 def test_the_compile_line_names_the_predicates_for_normals_at_a_face():
-    from proximity import _notice, _orient
+    from proximity.numerics import orient as _orient
+    from proximity.runtime import notice as _notice
 
     what, seconds = _notice.describe(_orient.plane_sides)
     assert what.startswith("kernels of exact orientation predicates (of normals at a face") and seconds

@@ -322,9 +322,15 @@ def exact_sqr_bounds(pair, a, b):
 # -- the fast path ------------------------------------------------------------------
 
 
-def _single(out, a, b):
-    """One pair, written to ``out``: the status, then the answer of
-    :func:`row_query`'s functions but its status (16 values)."""
+def _single(out, a, b, ra, rb):
+    """One pair, written to ``out`` (:data:`SINGLE_WIDTH` values): the status, then the
+    answer of :func:`row_query`'s functions but its status (16 values); then, for the
+    pair rounded by ``ra`` and ``rb``, what :func:`proximity.pair.queries.closest_points`
+    makes of it (the same operations, so the same bits): ``d - ra - rb``, the distance
+    ``max(d - ra - rb, 0)``, its square (the cores' where neither is rounded), each
+    side's point of its surface (:func:`proximity.numerics.rounding.surface_points`), and
+    1 where a surface point is lost in rounding or the status is not 0 (the general
+    path then answers)."""
     r = QUERY(TAKE_A(a.reshape(1, -1), 0), TAKE_B(b.reshape(1, -1), 0))
     ea, eb = SPLIT(r[11:])
     out[0], out[1], out[2] = r[0], r[1], r[2]
@@ -332,20 +338,53 @@ def _single(out, a, b):
     out[9], out[10] = r[9], r[10]
     out[11], out[12], out[13] = ea
     out[14], out[15], out[16] = eb
+    d = r[1]
+    rounded = ra != 0.0 or rb != 0.0
+    signed = d - (ra + rb) if rounded else d
+    distance = max(signed, 0.0) + 0.0
+    out[17], out[18] = signed, distance
+    out[19] = distance * distance if rounded else r[2]
+    out[26] = 0.0 if r[0] == 0.0 else 1.0
+    for side in range(2):
+        c0, c1, c2 = (r[3], r[4], r[5]) if side == 0 else (r[6], r[7], r[8])
+        p0, p1, p2 = (r[6], r[7], r[8]) if side == 0 else (r[3], r[4], r[5])
+        radius = ra if side == 0 else rb
+        at = 20 + 3 * side
+        if radius == 0.0:
+            out[at], out[at + 1], out[at + 2] = c0, c1, c2
+            continue
+        m = max(max(max(abs(c0), abs(c1)), abs(c2)), max(max(abs(p0), abs(p1)), abs(p2)))
+        m = max(m, radius)
+        if d < radius and (d / m) * (d / m) < 64.0 * 2.0**-52 * (radius / m):
+            out[26] = 1.0  # no direction from c to p: the core's normal there gives it
+        if p0 == c0 and p1 == c1 and p2 == c2:
+            out[at], out[at + 1], out[at + 2] = c0, c1, c2
+            continue
+        v0, v1, v2 = p0 - c0, p1 - c1, p2 - c2
+        top = max(max(abs(v0), abs(v1)), abs(v2))
+        v0, v1, v2 = v0 / top, v1 / top, v2 / top
+        length = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        v0, v1, v2 = v0 / length, v1 / length, v2 / length
+        out[at], out[at + 1], out[at + 2] = c0 + v0 * radius, c1 + v1 * radius, c2 + v2 * radius
 
 
-#: The fast path's signature: the output row, then each side's row.
+#: How many values :func:`_single` writes.
+SINGLE_WIDTH = 27
+
+#: The fast path's signature: the output row, each side's row, each side's radius.
 SINGLE_SIGNATURE = types.void(
     types.Array(types.float64, 1, "C"),
     types.Array(types.float64, 1, "C", readonly=True),
     types.Array(types.float64, 1, "C", readonly=True),
+    types.float64,
+    types.float64,
 )
 
 
 @functools.cache
 def single(pair, method):
     """The fast path of a pair kernel (``pair`` unswapped), as an entry point that skips Numba's
-    dispatch: ``f(out (17,), a (WA,), b (WB,))``, all C-contiguous float64."""
+    dispatch: ``f(out (SINGLE_WIDTH,), a (WA,), b (WB,), ra, rb)``, all C-contiguous float64."""
     tag = f"{pair.name}__{method.name}"
     kernel = specialize(_single, tag, SINGLE_SIGNATURE, **_bindings(pair, method))
     return kernel.overloads[tuple(SINGLE_SIGNATURE.args)].entry_point

@@ -24,21 +24,24 @@ pair registry (:mod:`proximity.pair.table`):
   batch of its posed vertices.
 """
 
-import weakref
-
 import numpy as np
 
 from .. import primitives
-from .._validate import broadcast_batch, freeze_result
+from .._validate import as_float64, broadcast_batch, freeze_result
 from .._validate import cutoff as _cutoff
-from ..features import _FEATURES, NONE, VERTEX0
+from ..features import NONE, VERTEX0
 from ..methods import resolve
 from ..numerics.normals import PairNormals
-from ..numerics.rigid import pose_matrix
+from ..numerics.rigid import pose_matrix, to_world
 from ..numerics.rounding import surface_points, total_radius
-from ..results import PairResult, pair_result
-from ..runtime import lazy, threads
+from ..results import pair_result
+from ..runtime import counts, lazy, threads
+from ..shapes.base import Point, Segment, Triangle
+from ..shapes.posed import Posed
+from ..shapes.rounded import Inflated
+from ..shapes.scene import Scene
 from . import table
+from .fast import _pad, closest_route, fast_for, mesh_pair
 
 _ZERO = np.zeros(())
 _ZERO.flags.writeable = False
@@ -48,8 +51,6 @@ class _Side:
     """One argument of a pair query, taken apart: its core, outer radius and kind."""
 
     def __init__(self, shape, name):
-        from ..shapes.rounded import Inflated
-
         if not hasattr(shape, "_rows") or not hasattr(shape, "closest_point"):
             raise TypeError(f"{name} must be a proximity shape; got {type(shape).__name__}")
         self.shape, self.name = shape, name
@@ -86,12 +87,6 @@ def _unposed(shape, name):
 
     Rounding and posing commute (a rigid motion keeps distances), so any nesting of
     posed and rounded views is the core rounded by the sum of the radii, posed."""
-    from ..numerics.rigid import to_world
-    from ..shapes.base import Point, Segment, Triangle
-    from ..shapes.posed import Posed
-    from ..shapes.rounded import Inflated
-    from ..shapes.scene import Scene
-
     rotation = translation = None
     radii = []
     core = shape
@@ -221,16 +216,14 @@ def _kernel_answer(side_a, side_b, pair, out_shape, method, full):
     first, second = (side_b, side_a) if pair.swapped else (side_a, side_b)
     a, b = first.hull_rows(), second.hull_rows()
     if a.ndim == 1 and b.ndim == 1:
-        row = np.empty(17)
-        pk.single(inner, method)(row, np.ascontiguousarray(a), np.ascontiguousarray(b))
+        row = np.empty(pk.SINGLE_WIDTH)
+        pk.single(inner, method)(row, np.ascontiguousarray(a), np.ascontiguousarray(b), 0.0, 0.0)
         if row[0] != 0.0:
             exact = pk.exact(inner, a, b)
             row[1:11] = exact[:10]
             row[11:] = np.concatenate([_pad(exact[10 : 10 + inner.extras[0]]),
                                        _pad(exact[10 + inner.extras[0] :])])  # fmt: skip
         if method.exact_fallback:
-            from ..runtime import counts
-
             counts.count(1, int(row[0] != 0.0))
         out = {"distance": row[1:2]}
         if full:
@@ -241,11 +234,6 @@ def _kernel_answer(side_a, side_b, pair, out_shape, method, full):
         with threads.kernel():
             out = pk.query(inner, method, a, b, out_shape, full)
     return _swapped(out) if pair.swapped else out
-
-
-def _pad(values):
-    values = list(values)
-    return np.array(values + [np.nan] * (3 - len(values)), dtype=np.float64)
 
 
 def _swapped(out):
@@ -259,7 +247,6 @@ def _swapped(out):
 def _pose_array(pose):
     if pose is None:
         return None
-    from .._validate import as_float64
 
     t = as_float64(pose, "pose_b", "(4, 4)")
     if t.shape != (4, 4) or not np.isfinite(t).all() or t[3].tolist() != [0.0, 0.0, 0.0, 1.0]:
@@ -430,170 +417,6 @@ def _elements(side, out, key, out_shape):
     return np.broadcast_to(np.arange(count).reshape(side.core.batch_shape), out_shape).reshape(-1)
 
 
-# -- the fast path: one pair of single 3D segments or triangles ---------------------------
-
-_fast = {}  # (type of a, type of b, method name) -> _Fast, or False where there is none
-_empty = np.empty
-_new = object.__new__
-_NAN = np.float64(np.nan)
-_NAN3 = np.full(3, np.nan)
-_NAN3.flags.writeable = False
-_MINUS1 = np.int64(-1)
-
-
-class _Fast:
-    """The fast path of a pair of single shape types: the kernel's entry point, and where
-    each field of the result sits in its output row (see :func:`proximity.pair.kernels.single`)."""
-
-    def __init__(self, pair, method):
-        pk = lazy.load("proximity.pair.kernels")
-        self.swapped = pair.swapped
-        inner = table.lookup(pair.b, pair.a) if pair.swapped else pair
-        self.inner, self.method = inner, method
-        self.entry = pk.single(inner, method)
-        self.exact_fallback = method.exact_fallback
-        first, second = (11, 14) if not pair.swapped else (14, 11)
-        points = (slice(3, 6), slice(6, 9)) if not pair.swapped else (slice(6, 9), slice(3, 6))
-        features = (9, 10) if not pair.swapped else (10, 9)
-        self.sides = [
-            (points[k], features[k], kind is primitives.SEGMENT, slice(start, start + 3))
-            for k, (kind, start) in enumerate(((pair.a, first), (pair.b, second)))
-        ]
-
-    def run(self, a, b):
-        row = _empty(17)
-        first, second = (b, a) if self.swapped else (a, b)
-        self.entry(row, first._args, second._args)
-        if row[0] != 0.0:
-            pk = lazy.load("proximity.pair.kernels")
-            exact = pk.exact(self.inner, first._args, second._args)
-            row[1:11] = exact[:10]
-            ea = self.inner.extras[0]
-            row[11:] = np.concatenate([_pad(exact[10 : 10 + ea]), _pad(exact[10 + ea :])])
-        if self.exact_fallback:
-            from ..runtime import counts
-
-            counts.count(1, int(row[0] != 0.0))
-        row.setflags(False)
-        return row
-
-    def result(self, row, a, b):
-        result = _new(PairResult)
-        fields = result.__dict__
-        fields["distance"] = row[1]
-        fields["sqr_distance"] = row[2]
-        (point_a, feature_a, segment_a, extra_a), (point_b, feature_b, segment_b, extra_b) = self.sides
-        fields["point_a"] = row[point_a]
-        fields["point_b"] = row[point_b]
-        fields["feature_a"] = _FEATURES[row.item(feature_a)]
-        fields["feature_b"] = _FEATURES[row.item(feature_b)]
-        fields["parameter_a"] = row[extra_a.start] if segment_a else _NAN
-        fields["parameter_b"] = row[extra_b.start] if segment_b else _NAN
-        fields["barycentric_a"] = _NAN3 if segment_a else row[extra_a]
-        fields["barycentric_b"] = _NAN3 if segment_b else row[extra_b]
-        fields["face_a"] = fields["face_b"] = fields["primitive_a"] = fields["primitive_b"] = _MINUS1
-        fields["source_a"] = fields["source_b"] = _MINUS1
-        fields["_pair"] = (self, row, a, b)  # for its normal: self.normals(row, a, b) when asked
-        return result
-
-    def normals(self, row, a, b):
-        """The :class:`PairNormals` of the answer ``row`` of ``a`` and ``b``."""
-        (point_a, feature_a, _, _), (point_b, feature_b, _, _) = self.sides
-        return PairNormals(a, b, row[point_a], row[point_b], row[1], row[feature_a], row[feature_b], 0, 0)
-
-
-def _fast_for(a, b, method):
-    """The :class:`_Fast` path of ``a`` and ``b``, or None where there is none."""
-    if type(method) is not str:
-        return None
-    key = (type(a), type(b), method)
-    fast = _fast.get(key)
-    if fast is None:
-        from ..shapes.base import Segment, Triangle
-
-        fast = False
-        if (
-            key[0] in (Segment, Triangle)
-            and key[1] in (Segment, Triangle)
-            and method in ("robust", "certified")
-        ):
-            pair = table.lookup(a._primitive, b._primitive)
-            fast = _Fast(pair, resolve(method))
-        _fast[key] = fast
-    if fast is False or a._args is None or b._args is None:
-        return None
-    return fast
-
-
-class _MeshPair:
-    """The fast path of :func:`distance` between a mesh and a mesh or a posed mesh: the sides,
-    the compiled descent and its constant arguments, prepared once per pair of trees; a
-    call poses, runs the descent on one query and reads its answer, the same bits as the
-    general path (:func:`_collection_answer`), which finishes what it leaves undecided."""
-
-    def __init__(self, mesh_a, mesh_b, method, posed):
-        pc = lazy.load("proximity.pair.composite")
-        bp = pc._broadphase()
-        self.a, depth_a, kinds_a, self.m_a = pc.side_of(mesh_a)
-        self.b, depth_b, kinds_b, self.m_b = pc.side_of(mesh_b)
-        self.depth = int(depth_a + depth_b)
-        present = bp.present_pairs(kinds_a, kinds_b, ("a", "b"))
-        self.descend = bp.descent_kernel(method, present, posed, -1, -1)  # faces have no radii
-        zero, none = np.zeros(1, np.int64), np.empty(0)
-        self.queries = bp.Queries(zero, zero, np.zeros(1), np.zeros(1), np.full(1, np.inf))
-        # The outputs a distance does not write, between signed, distance and undecided.
-        self.unused = (none, np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int8), np.empty(0, np.int8),
-                       np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.int64), np.empty(0, np.int64),
-                       np.empty(0, np.int64), np.empty(0, np.int64), none, none)  # fmt: skip
-        self.outputs, self.magnitude = bp.Outputs, bp.magnitude
-        self.unposed = np.zeros((3, 4))
-
-    def run(self, pose):
-        """The distance, or None where the descent left it undecided."""
-        magnitude = float(self.magnitude(self.m_a, self.m_b, pose, 0.0))
-        pose_array = self.unposed if pose is None else pose
-        out = self.outputs(np.empty(1), np.empty(1), *self.unused, np.empty(1))
-        with threads.kernel():
-            self.descend(0, 1, self.a, self.b, pose_array, self.depth, magnitude, self.queries, out, False)
-        if out.undecided[0] == out.undecided[0]:
-            return None
-        # As the general path's np.maximum(signed, 0.0) + 0.0 (the sum turns -0.0 into 0.0).
-        return np.float64(max(float(out.signed[0]), 0.0) + 0.0)
-
-
-_mesh_pairs = weakref.WeakKeyDictionary()  # tree of a -> {tree of b: {(method, posed): _MeshPair}}
-_last = (lambda: None, lambda: None, None, None)  # the last pair asked: (weak a, weak b, key, _MeshPair)
-
-
-def _mesh_pair(a, b, method):
-    """``(prepared fast path, 3 x 4 pose or None)`` of ``distance(a, b, method=method)``, or None
-    where ``a`` is not a :class:`~proximity.TriangleMesh` and ``b`` one or a posed one."""
-    from ..shapes.mesh import TriangleMesh
-    from ..shapes.posed import Posed
-
-    if type(a) is not TriangleMesh or method not in ("robust", "certified"):
-        return None
-    pose = None
-    if type(b) is Posed:
-        pose, b = pose_matrix(b.rotation, b.translation)[:3], b.shape  # as _poses and _pose_array give it
-    if type(b) is not TriangleMesh:
-        return None
-    global _last
-    tree_a, tree_b, key = a._tree, b._tree, (method, pose is not None)
-    ref_a, ref_b, last_key, fast = _last
-    if ref_a() is tree_a and ref_b() is tree_b and last_key == key:
-        return fast, pose
-    prepared = _mesh_pairs.get(tree_a)
-    if prepared is None:
-        prepared = _mesh_pairs[tree_a] = weakref.WeakKeyDictionary()
-    prepared = prepared.setdefault(tree_b, {})
-    fast = prepared.get(key)
-    if fast is None:
-        fast = prepared[key] = _MeshPair(a, b, resolve(method), pose is not None)
-    _last = (weakref.ref(tree_a), weakref.ref(tree_b), key, fast)
-    return fast, pose
-
-
 def _instances(query, a, b, method, max_distance, pose_b, signed):
     """The pair where a side is a scene of instances, part by part
     (:mod:`proximity.pair.instances`); None where neither side is one."""
@@ -626,9 +449,16 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
             f"closest_points(a, b, method={args[0]!r})"
         )
     if max_distance is None and pose_b is None:
-        fast = _fast_for(a, b, method)
-        if fast is not None:
-            return fast.result(fast.run(a, b), a, b)
+        closest = closest_route(a, b, method)
+        if closest is not None:
+            result = closest(a, b)
+            if result is not None:
+                return result
+        meshes = mesh_pair(a, b, method)
+        if meshes is not None:
+            found = meshes[0].closest_points(meshes[1], a, b.shape if type(b) is Posed else b)
+            if found is not None:
+                return found
     found = _instances(closest_points, a, b, method, max_distance, pose_b, False)
     if found is not None:
         return found
@@ -666,7 +496,6 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
                 value = np.where(found, value, -1)
             values[f"{name}_{key}"] = value
     if back is not None:
-        from ..numerics.rigid import to_world
 
         for key in ("point_a", "point_b"):
             values[key] = to_world(values[key], *back)
@@ -687,10 +516,12 @@ def _rounded_rows(out):
 def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """The distance between two shapes; see :func:`proximity.distance`."""
     if max_distance is None and pose_b is None:
-        fast = _fast_for(a, b, method)
+        fast = fast_for(a, b, method)
         if fast is not None:
-            return fast.run(a, b)[1]
-        meshes = _mesh_pair(a, b, method)
+            row = fast.run(a, b)
+            if row is not None:
+                return row[fast.at_distance]
+        meshes = mesh_pair(a, b, method)
         if meshes is not None:
             d = meshes[0].run(meshes[1])
             if d is not None:
@@ -709,6 +540,12 @@ def distance(a, b, *, method="robust", max_distance=None, pose_b=None):
 
 def signed_distance(a, b, *, method="robust", max_distance=None, pose_b=None):
     """``d - r_a - r_b``: negative where two rounded shapes overlap; see :func:`proximity.signed_distance`."""
+    if max_distance is None and pose_b is None:
+        fast = fast_for(a, b, method)
+        if fast is not None:
+            row = fast.run(a, b)
+            if row is not None:
+                return row[fast.at_signed] + 0.0
     found = _instances(signed_distance, a, b, method, max_distance, pose_b, True)
     if found is not None:
         return found

@@ -23,6 +23,11 @@ _FRAME = "_frame"
 _NORMAL = "_normal"
 # A pair's: what its normals need (see proximity.numerics.normals.PairNormals).
 _PAIR = "_pair"
+# A pair's fields not yet read from its answer: ``(reader, answer)``, where
+# ``reader.fields(answer)`` gives them by name (the fast path's, see
+# proximity.pair.queries: all but the distance and the witnesses), read at the
+# first access of any.
+_LAZY = "_lazy"
 
 
 def asdict(result):

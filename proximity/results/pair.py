@@ -6,7 +6,7 @@ import numpy as np
 
 from .._validate import freeze_fields, freeze_result
 from ..features import Feature
-from .base import _NORMAL, _PAIR, _frozen, asdict, format_repr
+from .base import _LAZY, _NORMAL, _PAIR, _frozen, asdict, format_repr
 
 
 @dataclass(frozen=True, repr=False)
@@ -78,6 +78,16 @@ class PairResult:
             if name.startswith("feature") and not isinstance(value, np.ndarray):
                 value = np.int8(value)
             object.__setattr__(self, name, value)
+
+    def __getattr__(self, name):
+        # Called only for a name not in the instance: a fast path's fields, read from its
+        # answer at the first access of any (see proximity.results.base._LAZY).
+        lazy = self.__dict__.get(_LAZY)
+        if lazy is None or name.startswith("__"):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self.__dict__.update(lazy[0].fields(lazy[1]))
+        del self.__dict__[_LAZY]
+        return object.__getattribute__(self, name)
 
     def __getstate__(self):
         # The fields, and the normals (computed now: what they need stays here).
