@@ -37,7 +37,7 @@ from ..shapes.posed import Posed
 from ..shapes.rounded import Capsule, Inflated, Sphere
 from . import table
 
-__all__ = ["closest_route", "fast_for", "mesh_pair"]
+__all__ = ["closest_route", "fast_for", "mesh_pair", "single_row"]
 
 
 def _pad(values):
@@ -55,6 +55,23 @@ _MINUS1 = np.int64(-1)
 _ROUNDED = (Inflated, Capsule, Sphere)
 _HULLS = (Segment, Triangle)
 _CORES = {Capsule: Segment, Sphere: Point}  # the type of the core of each named rounded shape
+
+
+def single_row(pair, method, a, b, entry=None):
+    """The row of :func:`proximity.pair.kernels.single` for rows ``a``, ``b`` of ``pair``
+    (unswapped; C-contiguous float64), unrounded, the exact fallback's answer written over
+    the kernel's where its status asks for it (counted for :func:`proximity.certified_stats`)."""
+    pk = lazy.load("proximity.pair.kernels")
+    row = _empty(pk.SINGLE_WIDTH)
+    (entry or pk.single(pair, method))(row, a, b, 0.0, 0.0)
+    if row[0] != 0.0:
+        exact = pk.exact(pair, a, b)
+        row[1:11] = exact[:10]
+        ea = pair.extras[0]
+        row[11:17] = np.concatenate([_pad(exact[10 : 10 + ea]), _pad(exact[10 + ea :])])
+    if method.exact_fallback:
+        counts.count(1, int(row[0] != 0.0))
+    return row
 
 
 class _Fast:
@@ -80,17 +97,9 @@ class _Fast:
         self.at_a, self.at_b = points
 
     def run(self, a, b):
-        row = _empty(self.width)
+        """The kernel's row of ``a`` and ``b`` (read-only), its exact fallback run where asked."""
         first, second = (b, a) if self.swapped else (a, b)
-        self.entry(row, first._args, second._args, 0.0, 0.0)
-        if row[0] != 0.0:
-            pk = lazy.load("proximity.pair.kernels")
-            exact = pk.exact(self.inner, first._args, second._args)
-            row[1:11] = exact[:10]
-            ea = self.inner.extras[0]
-            row[11:17] = np.concatenate([_pad(exact[10 : 10 + ea]), _pad(exact[10 + ea :])])
-        if self.exact_fallback:
-            counts.count(1, int(row[0] != 0.0))
+        row = single_row(self.inner, self.method, first._args, second._args, self.entry)
         row.setflags(False)
         return row
 

@@ -34,14 +34,14 @@ from ..methods import resolve
 from ..numerics.normals import PairNormals
 from ..numerics.rigid import pose_matrix, to_world
 from ..numerics.rounding import surface_points, total_radius
-from ..results import pair_result
-from ..runtime import counts, lazy, threads
+from ..results import Fill, pair_result
+from ..runtime import lazy, threads
 from ..shapes.base import Point, Segment, Triangle
 from ..shapes.posed import Posed
 from ..shapes.rounded import Inflated
 from ..shapes.scene import Scene
 from . import table
-from .fast import _pad, closest_route, fast_for, mesh_pair
+from .fast import closest_route, fast_for, mesh_pair, single_row
 
 _ZERO = np.zeros(())
 _ZERO.flags.writeable = False
@@ -216,15 +216,7 @@ def _kernel_answer(side_a, side_b, pair, out_shape, method, full):
     first, second = (side_b, side_a) if pair.swapped else (side_a, side_b)
     a, b = first.hull_rows(), second.hull_rows()
     if a.ndim == 1 and b.ndim == 1:
-        row = np.empty(pk.SINGLE_WIDTH)
-        pk.single(inner, method)(row, np.ascontiguousarray(a), np.ascontiguousarray(b), 0.0, 0.0)
-        if row[0] != 0.0:
-            exact = pk.exact(inner, a, b)
-            row[1:11] = exact[:10]
-            row[11:] = np.concatenate([_pad(exact[10 : 10 + inner.extras[0]]),
-                                       _pad(exact[10 + inner.extras[0] :])])  # fmt: skip
-        if method.exact_fallback:
-            counts.count(1, int(row[0] != 0.0))
+        row = single_row(inner, method, np.ascontiguousarray(a), np.ascontiguousarray(b))
         out = {"distance": row[1:2]}
         if full:
             out.update(sqr_distance=row[2:3], point=row[None, 3:6], feature=row[9:10].astype(np.int8),
@@ -347,19 +339,24 @@ def _member_rows(side, out_shape):
 
 
 def _side_fields(side, index, extra, kinds):
-    """``parameter``, ``barycentric``, ``face``, ``primitive`` and ``source`` of one side."""
+    """``parameter``, ``barycentric``, ``face``, ``primitive`` and ``source`` of one side: flat
+    arrays, or a :class:`~proximity.results.Fill` where the field holds one value in every row
+    (a triangle's parameter, a batch's face)."""
     n = len(extra)
-    parameter = np.full(n, np.nan)
-    barycentric = np.full((n, 3), np.nan)
-    if kinds is None:
-        kinds = np.full(n, side.primitive.code if side.primitive is not None else -1, np.int8)
-    seg = kinds == primitives.SEGMENT.code
-    tri = kinds == primitives.TRIANGLE.code
-    parameter[seg] = extra[seg, 0]
-    barycentric[tri] = extra[tri]
-    face = np.full(n, -1, np.int64)
-    primitive = np.full(n, -1, np.int64)
-    source = np.full(n, -1, np.int64)
+    nan, none = Fill(np.nan, np.float64), Fill(-1, np.int64)
+    nan3 = Fill(np.nan, np.float64, (3,))
+    if kinds is None:  # one kind in every row
+        code = side.primitive.code if side.primitive is not None else -1
+        parameter = extra[:, 0] if code == primitives.SEGMENT.code else nan
+        barycentric = extra if code == primitives.TRIANGLE.code else nan3
+    else:
+        parameter = np.full(n, np.nan)
+        barycentric = np.full((n, 3), np.nan)
+        seg = kinds == primitives.SEGMENT.code
+        tri = kinds == primitives.TRIANGLE.code
+        parameter[seg] = extra[seg, 0]
+        barycentric[tri] = extra[tri]
+    face = primitive = source = none
     core = side.core
     if side.collection and index is not None:
         if hasattr(core, "faces"):
@@ -475,28 +472,31 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
     with np.errstate(invalid="ignore", over="ignore"):
         distance = np.maximum(signed, 0.0) + 0.0
         sqr = distance * distance if rounded else np.asarray(out["sqr_distance"], np.float64)
-    sqr = np.where(found, sqr, np.inf)
+    # Rows without an answer (beyond the cutoff, not finite): inf, NaN, NONE and -1.
+    every = bool(found.all())
     values = {
         "distance": distance,
-        "sqr_distance": sqr,
-        "point_a": np.where(found[:, None], pa, np.nan)[:, : side_a.dim],
-        "point_b": np.where(found[:, None], pb, np.nan)[:, : side_a.dim],
-        "feature_a": np.where(found, out["feature_a"], NONE).astype(np.int8),
-        "feature_b": np.where(found, out["feature_b"], NONE).astype(np.int8),
+        "sqr_distance": sqr if every else np.where(found, sqr, np.inf),
+        "point_a": (pa if every else np.where(found[:, None], pa, np.nan))[:, : side_a.dim],
+        "point_b": (pb if every else np.where(found[:, None], pb, np.nan))[:, : side_a.dim],
     }
+    for key in ("feature_a", "feature_b"):
+        feature = np.asarray(out[key])
+        values[key] = (feature if every else np.where(found, feature, NONE)).astype(np.int8, copy=False)
     for key, side in (("a", side_a), ("b", side_b)):
         kinds = _winner_kinds(out, key)
         fields = _side_fields(side, out[f"index_{key}"], np.asarray(out[f"extra_{key}"]), kinds)
         for name, value in zip(
             ("parameter", "barycentric", "face", "primitive", "source"), fields, strict=True
         ):
-            if value.dtype.kind == "f":
+            if every or type(value) is Fill:
+                pass
+            elif value.dtype.kind == "f":
                 value = np.where(found[:, None] if value.ndim == 2 else found, value, np.nan)
             else:
                 value = np.where(found, value, -1)
             values[f"{name}_{key}"] = value
     if back is not None:
-
         for key in ("point_a", "point_b"):
             values[key] = to_world(values[key], *back)
     pose = _pose_array(pose_b)

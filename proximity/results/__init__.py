@@ -23,7 +23,7 @@ from .base import (
     format_repr,
     posed_normals,
 )
-from .pair import HausdorffResult, PairResult, pair_result
+from .pair import Fill, HausdorffResult, PairResult, pair_result
 from .point import (
     CircleResult,
     DiskResult,
@@ -44,6 +44,7 @@ __all__ = [
     "CircleResult",
     "DiskResult",
     "Feature",
+    "Fill",
     "HausdorffResult",
     "MeshResult",
     "PairResult",

@@ -1,6 +1,7 @@
 """The results of queries between two shapes: closest points, and bounds on the Hausdorff distance."""
 
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -208,13 +209,31 @@ def _new_pair(values, normals=None):
     return result
 
 
+class Fill(NamedTuple):
+    """A field of a :func:`pair_result` with one value in every row: ``value`` of ``dtype``,
+    each row's of shape ``trailing`` (a read-only broadcast of it, no memory per row)."""
+
+    value: object
+    dtype: type
+    trailing: tuple = ()
+
+
 def pair_result(values, out_shape, normals=None):
-    """The :class:`PairResult` of flat fields ``values`` (a row per pair), shaped ``out_shape``,
-    its normals from ``normals`` (see :attr:`PairResult.normal`) where given."""
+    """The :class:`PairResult` of flat fields ``values`` (a row per pair, or a :class:`Fill`),
+    shaped ``out_shape``, its normals from ``normals`` (see :attr:`PairResult.normal`) where
+    given.  A writeable array is taken as the caller's to give (made read-only, not copied); a
+    read-only one, which may view a shape's data, is copied."""
     fields = {}
     for name, value in values.items():
+        if type(value) is Fill:
+            value = np.broadcast_to(np.array(value.value, value.dtype), out_shape + value.trailing)
+            fields[name] = value[()] if value.ndim == 0 else value
+            continue
         value = np.asarray(value).reshape(out_shape + np.shape(value)[1:])
-        fields[name] = value[()] if value.ndim == 0 else freeze_result(np.array(value))
+        if value.ndim == 0:
+            fields[name] = value[()]
+        else:
+            fields[name] = freeze_result(value if value.flags.writeable else np.array(value))
         if name.startswith("feature") and value.ndim == 0:
             fields[name] = np.int8(value)
     return _new_pair(fields, normals)
