@@ -375,9 +375,7 @@ def closest_points(backend, a, b):
     )
     model = Model(
         library=backend.library,
-        primitive="; ".join(
-            f"{s.name}: {raw.models.get(s.name, kinds[s.kind])}" for s in (sa, sb)
-        ),
+        primitive="; ".join(f"{s.name}: {raw.models.get(s.name, kinds[s.kind])}" for s in (sa, sb)),
         probe=backend.pair_probe,
         segments=np.zeros(out_shape, np.int64),
         bound=np.zeros(out_shape),

@@ -393,8 +393,7 @@ def _summarise(name, r, reference, scale, point_rows, worst):
     gap = np.abs(distance - ref)[ok]
     relative = gap / np.maximum(scale.reshape(-1)[ok], np.finfo(np.float64).tiny)
     counts = {
-        Failure(code).name: int(np.sum(failure == code))
-        for code in np.unique(failure[failure != Failure.OK])
+        Failure(code).name: int(np.sum(failure == code)) for code in np.unique(failure[failure != Failure.OK])
     }
     summary = Summary(
         backend=name,

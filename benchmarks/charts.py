@@ -707,9 +707,7 @@ def mesh_peers(raw, path):
         return None
     plt = _plt()
     sets = ("near", "box")
-    fig, axes = plt.subplots(
-        len(meshes), len(sets), figsize=(11, 3.3 * len(meshes) + 2.2), squeeze=False
-    )
+    fig, axes = plt.subplots(len(meshes), len(sets), figsize=(11, 3.3 * len(meshes) + 2.2), squeeze=False)
     floor = 1e-19
     handles = {}
     for row, (label, entry) in enumerate(meshes):

@@ -311,8 +311,13 @@ def _pybullet_query(hull_a, hull_b):
 #: threshold pybullet needs); repeats ``None``: the run's, else that many.
 LIBRARIES = (
     ("robust", "proximity, robust", None, lambda a, b: proximity_query(a, b, "robust"), None),
-    ("robust_points", "proximity, robust, closest points", None,
-     lambda a, b: proximity_query(a, b, "robust", points=True), None),
+    (
+        "robust_points",
+        "proximity, robust, closest points",
+        None,
+        lambda a, b: proximity_query(a, b, "robust", points=True),
+        None,
+    ),
     ("certified", "proximity, certified", None, lambda a, b: proximity_query(a, b, "certified"), None),
     ("fcl", "python-fcl", "fcl", fcl_query, None),
     ("fcl_points", "python-fcl, nearest points", "fcl", lambda a, b: fcl_query(a, b, points=True), None),

@@ -478,8 +478,18 @@ class Trimesh(Peer):
 
 PEERS = {
     peer.name: peer
-    for peer in (Proximity(), Open3D(), Libigl(), Warp(), FCPW(), MeshLib(), Coal(), FCL(),
-                 PointCloudUtils(), Trimesh())  # fmt: skip
+    for peer in (
+        Proximity(),
+        Open3D(),
+        Libigl(),
+        Warp(),
+        FCPW(),
+        MeshLib(),
+        Coal(),
+        FCL(),
+        PointCloudUtils(),
+        Trimesh(),
+    )  # fmt: skip
 }
 
 

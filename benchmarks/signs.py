@@ -112,8 +112,9 @@ def _meshlib(vertices, faces, points):
 def _pysdf(vertices, faces, points):
     from pysdf import SDF
 
-    return -np.asarray(SDF(vertices.astype(np.float32), faces.astype(np.uint32))(points.astype(np.float32)),
-                       dtype=np.float64)  # fmt: skip  (pysdf's is positive inside)
+    return -np.asarray(
+        SDF(vertices.astype(np.float32), faces.astype(np.uint32))(points.astype(np.float32)), dtype=np.float64
+    )  # fmt: skip  (pysdf's is positive inside)
 
 
 def _trimesh(vertices, faces, points):
@@ -145,7 +146,8 @@ def _meshlib_grid(mode):
 #: Grids: ``name: (label, module, function(vertices, faces, lower, upper, shape, band) -> grid)``.
 GRID_PEERS = {
     "meshlib-grid-normal": (
-        "MeshLib meshToDistanceVolume, ProjectionNormal", *_meshlib_grid("ProjectionNormal")
+        "MeshLib meshToDistanceVolume, ProjectionNormal",
+        *_meshlib_grid("ProjectionNormal"),
     ),
     "meshlib-grid-winding": ("MeshLib meshToDistanceVolume, WindingRule", *_meshlib_grid("WindingRule")),
 }

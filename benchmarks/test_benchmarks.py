@@ -110,8 +110,13 @@ def test_the_mesh_chart_draws_from_the_peers_data(tmp_path):
         return {"1": {"sets": {"near": {"unsigned": timing}, "box": {"unsigned": timing}}}}
 
     raw = {
-        "meta": {"command": "python -m benchmarks.meshes --quick", "seed": 0, "points": 1000,
-                 "exact_sample": 50, "cpus": 2},  # fmt: skip
+        "meta": {
+            "command": "python -m benchmarks.meshes --quick",
+            "seed": 0,
+            "points": 1000,
+            "exact_sample": 50,
+            "cpus": 2,
+        },  # fmt: skip
         "meshes": {
             "icosphere, 1,280 faces": {
                 "size": 2.0,

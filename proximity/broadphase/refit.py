@@ -566,9 +566,7 @@ def refit(child, count, kinds, params, cull, normals=None):
     pieces = _FRAME_RANGES_PER_THREAD * threads.current()
     cuts = np.searchsorted(cost, cost[-1] * np.arange(1, pieces) / pieces, side="right")
     cuts = np.unique(np.concatenate([[0], cuts, [m]]))
-    threads.spread(
-        lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], most, bounds, *tree), len(cuts) - 1
-    )
+    threads.spread(lambda lo, hi: _fit_step(_FRAMES, cuts[lo], cuts[hi], most, bounds, *tree), len(cuts) - 1)
     if count[0] == 0 and sizes[0] > most:
         _fit_step(_MERGED, 0, 0, most, bounds, *tree)
     return bounds

@@ -79,6 +79,7 @@ def new_outputs(n, full, exact):
         undecided=np.empty(n if exact else 0),
     )
 
+
 _C2F = types.Array(types.float64, 2, "C", readonly=True)
 _C2F32 = types.Array(types.float32, 2, "C", readonly=True)
 _C1I = types.Array(types.int64, 1, "C", readonly=True)
@@ -86,6 +87,7 @@ _C1I = types.Array(types.int64, 1, "C", readonly=True)
 _C1N = types.Array(types.int32, 1, "C", readonly=True)
 _OUT1 = types.Array(types.float64, 1, "C")
 _OUT2 = types.Array(types.float64, 2, "C")
+
 
 def _tree_type(rows):
     """The Numba type of :data:`TreeArrays` whose ``params`` are of type ``rows``."""

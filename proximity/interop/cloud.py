@@ -512,9 +512,7 @@ def run_dask(client, mesh, points, output, chunk, method, threads, bar, sign=Non
     from .dask import records
 
     array = da.from_array(points, chunks=(chunk, 3), lock=False, asarray=False, meta=np.empty((0, 3)))
-    table = records(
-        mesh, array, method=method, threads=threads, fields=output.dtype.names, sign=sign
-    )
+    table = records(mesh, array, method=method, threads=threads, fields=output.dtype.names, sign=sign)
     written = table.map_blocks(
         _write_block,
         output,

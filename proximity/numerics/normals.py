@@ -33,7 +33,6 @@ ROUNDING = 64.0
 _EPS = 2.0**-52
 
 
-
 def surface_directions(kinds, params):
     """A unit vector normal to each primitive at every point of it, ``(n, 3)``:
     along which a point on the primitive reaches the rounded surface.
@@ -70,6 +69,7 @@ def surface_directions(kinds, params):
         good = (length[:, 0] > 0) & np.isfinite(length[:, 0])
         out[rows[good]] = n[good] / length[good]
     return out
+
 
 def query_normals(result, points, members, shape, floor=None):
     """The normals of a query's rows (see :attr:`proximity.Result.normal`); ``floor``

@@ -266,7 +266,6 @@ def orient3d_fraction(a, b, c, d):
     return (det > 0) - (det < 0)
 
 
-
 @kernel()
 def _both(x):
     return orient3d(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11]) + orient2d(

@@ -16,7 +16,6 @@ from ..methods import CERTIFIED
 from ..numerics import exact
 from ..numerics.rounding import unfaithful
 from ..runtime import lazy, threads
-from . import table
 
 
 def _broadphase():
@@ -136,7 +135,7 @@ def certified_answers(pair, rows_a, rows_b):
                 out[name].append(value)
         out = {name: np.array(value) for name, value in out.items()}
         return _swap(out) if pair.swapped else out
-    inner = table.lookup(pair.b, pair.a) if pair.swapped else pair
+    inner = pair.unswapped
     first, second = (rows_b, rows_a) if pair.swapped else (rows_a, rows_b)
     wa, wb = 3 * inner.a.vertices, 3 * inner.b.vertices
     a = np.ascontiguousarray(first[:, :wa])

@@ -81,7 +81,7 @@ class _Fast:
     def __init__(self, pair, method):
         pk = lazy.load("proximity.pair.kernels")
         self.swapped = pair.swapped
-        inner = table.lookup(pair.b, pair.a) if pair.swapped else pair
+        inner = pair.unswapped
         self.inner, self.method = inner, method
         self.entry = pk.single(inner, method)
         self.width = pk.SINGLE_WIDTH

@@ -422,7 +422,7 @@ def row_query(pair, method):
     (the kinds of the rows ``qa[ka]`` and ``qb[kb]``, parameters as a collection stores them)
     to the 17 values of the module docstring; compiled into the descent."""
     if pair.swapped:
-        inner = row_query(_unswapped(pair), method)
+        inner = row_query(pair.unswapped, method)
         return specialize(_swap_row, f"{pair.name}__{method.name}", role="inline", INNER=inner)
     if pair.point:
         row = pair.b.kernels.row_query(pair.b, method)
@@ -507,7 +507,7 @@ def candidates(pair):
     descent: ``f(z, n)`` on scratch ``z`` of ``rows(pair)`` rows and ``CAP`` columns."""
     from ..methods import ROBUST as robust
 
-    inner = _unswapped(pair) if pair.swapped else pair
+    inner = pair.unswapped
     bindings = _bindings(inner, robust)
     bindings.update(SIDE_A=3 * pair.a.vertices, SIDE_B=3 * pair.b.vertices, SWAP=pair.swapped)
     put = specialize(_put_uniform, inner.name, role="inline", SPLIT=bindings["SPLIT"])
@@ -517,12 +517,6 @@ def candidates(pair):
 def candidate_rows(pair):
     """Rows of the scratch of :func:`candidates`: both sides' rows, 16 answers, a flag."""
     return 3 * pair.a.vertices + 3 * pair.b.vertices + 17
-
-
-def _unswapped(pair):
-    from .table import lookup
-
-    return lookup(pair.b, pair.a)
 
 
 NONE_ROW = (NAN,) * 9 + (float(NONE), float(NONE)) + (NAN,) * 6

@@ -212,7 +212,7 @@ def _point_answer(side_a, side_b, pair, out_shape, method, full):
 def _kernel_answer(side_a, side_b, pair, out_shape, method, full):
     """Two batches of segments or triangles: the pair kernel, the fast path for one pair."""
     pk = lazy.load("proximity.pair.kernels")
-    inner = table.lookup(pair.b, pair.a) if pair.swapped else pair
+    inner = pair.unswapped
     first, second = (side_b, side_a) if pair.swapped else (side_a, side_b)
     a, b = first.hull_rows(), second.hull_rows()
     if a.ndim == 1 and b.ndim == 1:
@@ -500,8 +500,15 @@ def closest_points(a, b, *args, method="robust", max_distance=None, pose_b=None)
         for key in ("point_a", "point_b"):
             values[key] = to_world(values[key], *back)
     pose = _pose_array(pose_b)
-    rows = [out["point_a"], out["point_b"], np.where(found, out["distance"], np.nan), out["feature_a"],
-            out["feature_b"], _elements(side_a, out, "a", out_shape), _elements(side_b, out, "b", out_shape)]
+    rows = [
+        out["point_a"],
+        out["point_b"],
+        np.where(found, out["distance"], np.nan),
+        out["feature_a"],
+        out["feature_b"],
+        _elements(side_a, out, "a", out_shape),
+        _elements(side_b, out, "b", out_shape),
+    ]
     rows = [np.asarray(value).reshape(out_shape + np.shape(value)[1:]) for value in rows]
     pose = None if pose is None else (pose[:, :3], pose[:, 3])
     normals = PairNormals(side_a.core, side_b.core, *rows, pose=pose, back=back, dim=side_a.dim)

@@ -82,6 +82,12 @@ class Pair:
         return f"{self.a.name}_{self.b.name}"
 
     @property
+    def unswapped(self):
+        """The record whose module answers this pair in its own order: this one, or the
+        pair the other way round where ``swapped``."""
+        return REGISTRY[(self.b.name, self.a.name)] if self.swapped else self
+
+    @property
     def kernels(self):
         """The kernel module (importing it loads the compiler)."""
         return lazy.load(f"proximity.{self.module}")

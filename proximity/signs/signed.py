@@ -175,20 +175,22 @@ def edge_twins(faces, n_vertices):
     if len(repeated):
         first, second = sorted_sides[repeated[0]], sorted_sides[repeated[0] + 1]
         a, b = int(start[first]), int(end[first])
-        return twin, collapsed, (
-            f"faces {first // 3} and {second // 3} both run edge ({a}, {b}) from {a} to {b}: more than two "
-            "faces meet there, or the faces' orientations disagree"
+        why = (
+            f"faces {first // 3} and {second // 3} both run edge ({a}, {b}) from {a} to {b}: "
+            "more than two faces meet there, or the faces' orientations disagree"
         )
+        return twin, collapsed, why
     reverse = end[live] * n_vertices + start[live]
     at = np.minimum(np.searchsorted(keys, reverse), len(keys) - 1)
     missing = np.flatnonzero(keys[at] != reverse)
     if len(missing):
         side = live[missing[0]]
         a, b = int(start[side]), int(end[side])
-        return twin, collapsed, (
-            f"edge ({a}, {b}) of face {side // 3} has no face running it from {b} to {a}: the surface has a "
-            "boundary there (a hole), or the face on the other side has the opposite orientation"
+        why = (
+            f"edge ({a}, {b}) of face {side // 3} has no face running it from {b} to {a}: the surface "
+            "has a boundary there (a hole), or the face on the other side has the opposite orientation"
         )
+        return twin, collapsed, why
     twin[live] = sorted_sides[at]
     return twin, collapsed, None
 

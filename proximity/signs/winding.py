@@ -472,8 +472,10 @@ def _face(tri, j, px, py, pz, at_vertex):
         ax, ay, az = ax * s, ay * s, az * s
         bx, by, bz = bx * s, by * s, bz * s
         cx, cy, cz = cx * s, cy * s, cz * s
-    if (ax == 0.0 and ay == 0.0 and az == 0.0) or (bx == 0.0 and by == 0.0 and bz == 0.0) or (
-        cx == 0.0 and cy == 0.0 and cz == 0.0
+    if (
+        (ax == 0.0 and ay == 0.0 and az == 0.0)
+        or (bx == 0.0 and by == 0.0 and bz == 0.0)
+        or (cx == 0.0 and cy == 0.0 and cz == 0.0)
     ):
         return 0.0, at_vertex  # P is a vertex of the face
     la = math.sqrt(ax * ax + ay * ay + az * az)
@@ -485,9 +487,12 @@ def _face(tri, j, px, py, pz, at_vertex):
     det = ax * (p1 - p2) + ay * (q1 - q2) + az * (r1 - r2)
     perm = abs(ax) * (abs(p1) + abs(p2)) + abs(ay) * (abs(q1) + abs(q2)) + abs(az) * (abs(r1) + abs(r2))
     lll = la * lb * lc
-    den = lll + (ax * bx + ay * by + az * bz) * lc + (bx * cx + by * cy + bz * cz) * la + (
-        cx * ax + cy * ay + cz * az
-    ) * lb
+    den = (
+        lll
+        + (ax * bx + ay * by + az * bz) * lc
+        + (bx * cx + by * cy + bz * cz) * la
+        + (cx * ax + cy * ay + cz * az) * lb
+    )
     # The differences are off by u each, and each sum of products by a few u
     # of its terms' magnitudes: 16 u for det, 128 u of la lb lc for den (four
     # terms each at most la lb lc, each with a few u from the lengths).
@@ -665,8 +670,18 @@ def numbers(hierarchy, points, full=False, rule=NONZERO):
     if len(points):
         with threads.kernel():
             _winding_kernel(
-                h.nodes, h.child, h.count, h.triangles, h.weight, points, _visiting_order(points), *h.scale,
-                bool(full), int(rule), w, e,
+                h.nodes,
+                h.child,
+                h.count,
+                h.triangles,
+                h.weight,
+                points,
+                _visiting_order(points),
+                *h.scale,
+                bool(full),
+                int(rule),
+                w,
+                e,
             )
     return w, e
 
