@@ -513,10 +513,7 @@ def _finish(q, A, B, pose, queries, fs, ist, win, fin, fin_lo, tb):
             return best_hi
         ia, ib = A.index[ka], B.index[kb]
         if e < fs[0] or (e == fs[0] and (ia < ist[0] or (ia == ist[0] and ib < ist[1]))):
-            fs[0], fs[2], fs[3] = e, ra, rb
-            ist[0], ist[1], ist[2], ist[3] = ia, ib, ka, kb
-            for k in range(17):
-                win[k] = c[k]
+            _win(fs, ist, win, c, e, ra, rb, ia, ib, ka, kb)
     return math.nan
 
 
