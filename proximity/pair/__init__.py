@@ -1,8 +1,12 @@
 """Queries between two shapes: one module per pair of kinds, the tables between them, Hausdorff.
 
+:mod:`.fast`
+    The routes of single pairs, resolved once per pair of shape types and method: one
+    (rounded) segment or triangle against another, a mesh against a (posed) mesh.
 :mod:`.queries`
-    The public pair queries (``closest_points``, ``distance``, ``signed_distance``): each call
-    resolves its pair of shape types once and goes down one path.
+    The general path of the pair queries (``closest_points``, ``distance``,
+    ``signed_distance``): the sides taken apart (posed, rounded, batched), the kinds looked up
+    once in :mod:`.table`, then one of the answers below.
 :mod:`.table`
     The pairs of primitive kinds, and the kernel module that answers each.
 :mod:`.segment_segment`, :mod:`.segment_triangle`, :mod:`.triangle_triangle`
