@@ -9,7 +9,10 @@ path.  It prints each kernel as it is done.
 Without it, the first query of a process that finds a kernel missing from
 the cache prints one line on stderr saying what it compiles and roughly how
 long that takes; ``PROXIMITY_QUIET=1`` in the environment silences it (see
-:mod:`proximity.runtime.notice`).
+:mod:`proximity.runtime.notice`).  The pair queries are compiled for the
+pairs people ask most (single and batched segments, triangles and capsules;
+meshes against meshes, posed meshes, segments, capsules, triangles and
+points); other combinations of kinds in scenes compile at their first use.
 
 Examples
 --------
@@ -28,6 +31,7 @@ import numpy as np
 
 from . import methods as _methods
 from . import primitives
+from .pair import table as _pair_table
 
 
 def _kernel_modules():
@@ -125,6 +129,33 @@ def _sides():
     plane_sides(np.array([0, 1], np.int8), params, np.array([[0.25, 0.25, 0.0], [0.5, 0.0, 0.0]]))
 
 
+def _pairs(method):
+    """The pair queries of ``method``: single pairs (rounded too), batches of each pair of kinds,
+    and the descents of meshes against meshes (posed or not), segments, capsules, triangles and
+    points."""
+    from .pair import queries
+    from .shapes.base import Point, Segment, Triangle
+    from .shapes.mesh import TriangleMesh
+    from .shapes.rounded import Capsule
+    from .testing.meshes import icosphere
+
+    mesh = TriangleMesh(*icosphere(1))
+    lifted = np.eye(4)
+    lifted[:3, 3] = [0.0, 0.0, 3.0]
+    segment = Segment([[0.0, 0.0, 2.0], [1.0, 0.0, 3.0]])
+    triangle = Triangle([[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [0.0, 1.0, 2.5]])
+    segments = Segment(np.stack([segment.vertices] * 2))
+    triangles = Triangle(np.stack([triangle.vertices] * 2))
+    capsule = Capsule(segment.vertices, 0.1)
+    pairs = [(segment, segment), (segment, triangle), (triangle, triangle), (capsule, capsule),
+             (segments, segments), (segments, triangles), (triangles, triangles),
+             (mesh, mesh), (mesh, mesh.transformed(lifted)), (segment, mesh), (segments, mesh),
+             (capsule, mesh), (triangle, mesh), (Point([0.0, 0.0, 2.0]), mesh)]  # fmt: skip
+    for a, b in pairs:
+        queries.closest_points(a, b, method=method)
+        queries.distance(a, b, method=method)
+
+
 def compile_all(methods=None, log=sys.stdout):
     """Compile the kernels of ``methods`` (default: every method) and of the broad phase.
 
@@ -142,6 +173,9 @@ def compile_all(methods=None, log=sys.stdout):
     """
     names = list(_methods.REGISTRY) if methods is None else list(methods)
     jobs = [job for name in names for job in _jobs(name)]
+    for name in names:
+        if all(name in p.methods for p in _pair_table.REGISTRY.values()):
+            jobs.append((f"pair queries: {name}", lambda name=name: _pairs(name)))
     jobs.append(("mesh and scene: hierarchy build and search", _broad_phase))
     jobs.append(("mesh: the signs of the signed distance", _winding))
     jobs.append(("circles and disks: unit normals of large batches", _round_frames))

@@ -157,16 +157,41 @@ def test_the_compile_line_is_printed_once_and_can_be_silenced(monkeypatch, capsy
     def _robust_block__robust__e1b9(): ...
 
     _robust_block__robust__e1b9.__module__ = "proximity.point.triangle"
-    monkeypatch.setattr(_notice, "_said", False)
+    monkeypatch.setattr(_notice, "_said", set())
     monkeypatch.setenv("PROXIMITY_QUIET", "0")
     _notice.compiling(_robust_block__robust__e1b9)
     _notice.compiling(_robust_block__robust__e1b9)
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the robust kernels of batch queries" in err
-    monkeypatch.setattr(_notice, "_said", False)
+    monkeypatch.setattr(_notice, "_said", set())
     monkeypatch.setenv("PROXIMITY_QUIET", "1")
     _notice.compiling(_robust_block__robust__e1b9)
     assert capsys.readouterr().err == ""
+
+
+def test_each_kind_of_first_use_says_so_once(monkeypatch, capsys):
+    """A process that compiles a one-point query, then a mesh's search, then a pair query is
+    told about each, once, in one wording."""
+    from proximity.runtime import notice as _notice
+
+    def kernel(module, name):
+        def f(): ...
+
+        f.__module__, f.__qualname__ = module, name
+        return f
+
+    monkeypatch.setattr(_notice, "_said", set())
+    monkeypatch.setenv("PROXIMITY_QUIET", "0")
+    firsts = [kernel("proximity.point.point", "_single__robust__e1b9"),
+              kernel("proximity.broadphase.traverse", "_loop__robust__e1b9"),
+              kernel("proximity.pair.descent", "_descend__robust__e1b9")]  # fmt: skip
+    for f in firsts + firsts:
+        _notice.compiling(f)
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 3, lines
+    for line, what in zip(lines, ("one-point queries", "meshes and scenes", "pair queries"), strict=True):
+        assert line.startswith(f"proximity: compiling the robust kernels of {what}"), line
+        assert line.endswith("set PROXIMITY_QUIET=1 to hide this line."), line
 
 
 def test_the_compile_line_names_the_hierarchy_for_meshes():

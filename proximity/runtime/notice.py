@@ -3,16 +3,18 @@
 A query compiles its kernels at its first use on a machine and keeps them
 in the disk cache (:mod:`proximity.runtime.cache`); until then a first mesh query
 takes seconds (most of them in the hierarchy's build), with nothing else
-to show for it, and a notebook looks hung.  So the first kernel of a
-process that is not in the disk cache prints one line on stderr: what is
-compiling, roughly how long it takes, and the command that compiles every
-kernel ahead.  Later compiles of the same process print nothing, and a
-process whose kernels are all cached prints nothing at all.
+to show for it, and a notebook looks hung.  So each kind of first use of a
+process (one-point queries, batches, meshes and scenes, signs, the exact
+predicates, pair queries; per method) whose first kernel is not in the disk
+cache prints one line on stderr, in one wording: what is compiling, roughly
+how long it takes, and the command that compiles every kernel ahead.  Later
+compiles of the same kind in the process print nothing, and a process whose
+kernels are all cached prints nothing at all.
 
 Every kernel's compile takes from a fraction of a second to a few seconds
 of one core, plus about a second for the compiler's own start in a new
-process, and a first query compiles several: so every cold first query
-takes more than about a second, and each one announces itself.
+process, and a first use compiles several: so every cold first use takes
+more than about a second, and each one announces itself.
 
 Set the environment variable ``PROXIMITY_QUIET`` (to anything but ``""``
 or ``"0"``) to silence the line; it is read when the line would be
@@ -43,11 +45,12 @@ _SIGNS = ("the winding number of signed distances", "about 1 s")
 # normals of points within rounding of a face (about 4 s with their sides' loop) and
 # the signs' checks and ray crossings.
 _PREDICATES = ("exact orientation predicates (of normals at a face, of the signs' checks)", "a few seconds")
+_PAIRS = ("pair queries (the pair kernels, the descent of two hierarchies)", "seconds to a minute")
 _SINGLE = ("one-point queries", "about 1 s")
 _BATCH = ("batch queries", "about 2 to 5 s")
 
 _lock = threading.Lock()
-_said = False
+_said = set()  # the kinds of first use this process has announced
 
 
 def quiet():
@@ -73,6 +76,8 @@ def describe(func):
         what, seconds = _SIGNS
     elif module == "proximity.numerics.orient":
         what, seconds = _PREDICATES
+    elif module.startswith("proximity.pair"):
+        what, seconds = _PAIRS
     elif name.startswith("_single"):
         what, seconds = _SINGLE
     else:
@@ -82,17 +87,15 @@ def describe(func):
 
 
 def compiling(func):
-    """Print the line, the first time in this process, for a compile of the kernel ``func``."""
-    global _said
-    if _said:
-        return
+    """Print the line for a compile of the kernel ``func``, the first time in this process
+    that its kind of first use (:func:`describe`) compiles."""
+    what, seconds = describe(func)
     with _lock:
-        if _said:
+        if what in _said:
             return
-        _said = True
+        _said.add(what)
     if quiet():
         return
-    what, seconds = describe(func)
     print(
         f"proximity: compiling the {what}, once for this machine ({seconds}; later runs "
         f"load them from the disk cache).  Run `python -m proximity.compile` to compile them all ahead; "
