@@ -154,3 +154,19 @@ def test_without_numba_s_private_cache_kernels_compile_in_memory(monkeypatch):
     assert not caught  # warned once
     assert first(2.5) == second(2.5) == 5.0
     assert type(first._cache).__name__ == type(second._cache).__name__ == "NullCache"
+
+
+def test_the_cache_stamp_covers_every_folder_of_the_package():
+    """A kernel inlines helpers of other modules, which Numba does not watch: the stamp in every
+    cached kernel's name hashes every source file of the package, in every folder, so that an
+    edit anywhere compiles the kernels again rather than loading stale ones."""
+    from pathlib import Path
+
+    import proximity
+    from proximity.runtime import jit
+
+    package = Path(proximity.__file__).parent
+    every = {str(p.relative_to(package)) for p in package.rglob("*.py") if "__pycache__" not in p.parts}
+    stamped = {name for name, _ in jit.stamped_sources()}
+    assert stamped == every
+    assert {"__init__.py", "pair/descent.py", "point/triangle.py", "numerics/orient.py"} <= stamped

@@ -119,18 +119,26 @@ def _sources_stamp():
     """
     global _stamp
     if _stamp is None:
-        here = os.path.dirname(os.path.abspath(__file__))
         digest = hashlib.blake2b(digest_size=6)
-        for folder, subfolders, names in os.walk(here):
-            subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
-            for name in sorted(names):
-                if name.endswith(".py"):
-                    path = os.path.join(folder, name)
-                    info = os.stat(path)
-                    name = os.path.relpath(path, here)
-                    digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns};".encode())
+        for name, path in stamped_sources():
+            info = os.stat(path)
+            digest.update(f"{name}:{info.st_size}:{info.st_mtime_ns};".encode())
         _stamp = digest.hexdigest()
     return _stamp
+
+
+def stamped_sources():
+    """``[(name relative to the package, path)]`` of every source file of the package (every
+    folder's, the root's), which :func:`_sources_stamp` hashes."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = []
+    for folder, subfolders, names in os.walk(package):
+        subfolders[:] = sorted(d for d in subfolders if d != "__pycache__")
+        for name in sorted(names):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                out.append((os.path.relpath(path, package), path))
+    return out
 
 
 def specialize(func, tag, signature=None, parallel=False, role="kernel", nogil=False, **bindings):
