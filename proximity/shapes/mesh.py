@@ -210,9 +210,10 @@ class TriangleMesh(Collection):
         Warns
         -----
         RuntimeWarning
-            Once per mesh, where ``sign="auto"`` turns to the winding number
-            (or ``sign="pseudonormal"`` is asked on a mesh that is not a
-            solid), saying why (see :attr:`validity`).
+            Where the mesh is not a solid, saying why (see :attr:`validity`):
+            at every query with ``sign="pseudonormal"``, whose signs can be
+            wrong there (and are not :meth:`signed`'s ``certain``); once per
+            mesh where ``sign="auto"`` turns to the winding number.
 
         Notes
         -----
@@ -341,8 +342,10 @@ class TriangleMesh(Collection):
         product clears its bound of rounding errors, or the winding
         number's bound keeps it on one side of 1/2.  It is False on the
         surface (distance 0), within rounding of it, on a mesh with holes
-        where the winding number is within its bound of 1/2, and where the
-        point is not finite.
+        where the winding number is within its bound of 1/2, where the
+        point is not finite, and where ``sign="pseudonormal"`` decides on a
+        mesh that is not a solid (:attr:`validity`), whose pseudonormals
+        prove nothing.
 
         Examples
         --------
@@ -452,6 +455,8 @@ class TriangleMesh(Collection):
         if counts.shape != (3,) or counts.dtype.kind not in "iu" or (counts < 1).any():
             raise ValueError(f"shape must be 3 integers >= 1; got {shape!r}")
         band = None if max_distance is None else cutoff(max_distance)
+        if sign != "winding" and self.validity.closed:
+            self._sign_plan(sign, stacklevel=3)  # its warning, once for the grid's many queries
         from ..signs import grid
 
         return grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)
@@ -561,36 +566,46 @@ class TriangleMesh(Collection):
             object.__setattr__(self, "_signs", state)  # a cache: the mesh does not change
         return state
 
-    def _signed(self, points, method, sign, max_distance=None):
+    def _sign_plan(self, sign, warn=True, stacklevel=4):
+        """``(state, use_winding, proven)`` of a signed query with ``sign`` (validated): the sign
+        tables (None for the winding number), whether the winding number tells the sides, and
+        whether a side the pseudonormal decides is proven (it is not on a mesh that is not a
+        solid).  Raises where the sign cannot be had; with ``warn``, warns where the mesh is not
+        a solid: each time for ``"pseudonormal"``, whose answer can be wrong there, once per mesh
+        for ``"auto"``, whose answer is right but slower."""
+        if sign == "winding":
+            return None, True, True
+        state = self._sign_state()
+        v = state.validity
+        if not v.closed or (sign == "pseudonormal" and state.signs is None):
+            kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
+            raise ValueError(
+                f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
+                "sign='winding' works on any mesh"
+            )
+        if v.solid:
+            return state, False, True
+        use_winding = sign == "auto" or state.signs is None
+        if warn and (not use_winding or not state.warned):
+            if use_winding:
+                state.warned = True
+                then = "the signs use the winding number instead (exact, slower)"
+            else:
+                then = ("the pseudonormal signs can be wrong, and are not certain; sign='auto' or 'winding' "
+                        "are right")  # fmt: skip
+            warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
+                          stacklevel=stacklevel)  # fmt: skip
+        return state, use_winding, False  # the pseudonormal proves no side of a mesh that is not a solid
+
+    def _signed(self, points, method, sign, max_distance=None, warn=True):
         """``(output shape, distances (n,), inside (n,), certain (n,))`` for
         :meth:`signed_distance`; rows beyond ``max_distance`` at an infinite
-        distance, their side from the winding number."""
+        distance, their side from the winding number.  ``warn``: as :meth:`_sign_plan`
+        (False where the caller has warned for its query)."""
         one_of(sign, "sign", SIGNS)
         cut = cutoff(max_distance)
         _signed = lazy.load("proximity.signs.signed")
-
-        use_winding = sign == "winding"
-        state = None
-        if not use_winding:
-            state = self._sign_state()
-            v = state.validity
-            if not v.closed or (sign == "pseudonormal" and state.signs is None):
-                kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
-                raise ValueError(
-                    f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
-                    "sign='winding' works on any mesh"
-                )
-            if not v.solid:
-                if not state.warned:
-                    state.warned = True
-                    then = (
-                        "the signs use the winding number instead (exact, slower)"
-                        if sign == "auto" or state.signs is None
-                        else "the pseudonormal signs can be wrong; sign='auto' or 'winding' are right"
-                    )
-                    warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
-                                  stacklevel=3)  # fmt: skip
-                use_winding = sign == "auto" or state.signs is None
+        state, use_winding, proven = self._sign_plan(sign, warn)
         if use_winding:
             distance = np.asarray(self.distance(points, method=method, max_distance=max_distance))
             out_shape = distance.shape
@@ -608,7 +623,7 @@ class TriangleMesh(Collection):
         near |= np.isnan(distance)
         inside, certain = _signed.inside(
             state.signs, self.vertices, state.faces, flat[near], face[near], feature[near], distance[near],
-            flip=state.validity.inverted, winding=self._winding_sides,
+            flip=state.validity.inverted, winding=self._winding_sides, proven=proven,
         )  # fmt: skip
         if near.all():
             return out_shape, distance, inside, certain

@@ -64,7 +64,7 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
         far = clear & (d - radius > band) if band is not None else np.zeros(n_blocks, dtype=bool)
         if exact_side:
             rows = np.flatnonzero(clear.reshape(-1))
-            _, _, inside, certain = mesh._signed(flat[rows], method, sign)
+            _, _, inside, certain = mesh._signed(flat[rows], method, sign, warn=False)
             sure = np.zeros(n_blocks, dtype=bool)
             sure.reshape(-1)[rows] = certain
             block_sign.reshape(-1)[rows] = np.where(inside, -1.0, 1.0)
@@ -95,7 +95,7 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
             if kind == _CLEAR:
                 value = np.asarray(mesh.distance(points, method=method)) * sides[index]
             elif kind == _OWN:
-                _, distance, inside, _ = mesh._signed(points, method, sign)
+                _, distance, inside, _ = mesh._signed(points, method, sign, warn=False)
                 value = np.where(inside, -distance, distance)
             else:
                 inside = _sides(mesh, points, method, sign)
@@ -146,7 +146,7 @@ def _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side):
     side[group[clear_side]] = sides[todo[clear_side]]
     ask = np.flatnonzero(far & (side == 0.0))
     if exact_side and len(ask):
-        _, _, inside, certain = mesh._signed(centre[ask], method, sign)
+        _, _, inside, certain = mesh._signed(centre[ask], method, sign, warn=False)
         side[ask[certain]] = np.where(inside[certain], -1.0, 1.0)
     done = far[group] & (side[group] != 0.0)
     flat[todo[done]] = np.inf * side[group[done]]
@@ -167,5 +167,5 @@ def _sides(mesh, points, method, sign):
     if sign == "winding" or (sign == "auto" and not mesh.validity.solid):
         inside, _ = mesh._winding_sides(points, np.ones(len(points)))
         return inside
-    _, _, inside, _ = mesh._signed(points, method, sign)
+    _, _, inside, _ = mesh._signed(points, method, sign, warn=False)
     return inside

@@ -208,7 +208,7 @@ def feature_rows(signs, faces, face, feature):
     return row, anchor
 
 
-def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding):
+def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding, proven=True):
     """``(inside, certain)``: whether each point is inside the closed mesh, and proven so.
 
     ``face``, ``feature`` and ``distance`` are the query's answer for
@@ -219,7 +219,9 @@ def inside(signs, vertices, faces, points, face, feature, distance, *, flip, win
     longest edge; inside is ``(P - V) . N < 0``, or ``> 0`` where ``flip``
     (a solid whose faces point inwards).  ``winding(points, distance)``
     decides the other points at a positive distance, returning ``(inside,
-    certain)``.  Rows at distance 0 or NaN are False in both.
+    certain)``.  Rows at distance 0 or NaN are False in both.  With ``proven`` False (a mesh
+    that is not a solid, where the pseudonormal's side can be wrong) no side it decides is
+    certain.
     """
     out = np.zeros(len(points), dtype=bool)
     certain = np.zeros(len(points), dtype=bool)
@@ -236,7 +238,7 @@ def inside(signs, vertices, faces, points, face, feature, distance, *, flip, win
         bound = normal[:, 3] * reach + MARGIN * (reach + signs.longest[f])
         decided = np.abs(dot) > bound
     out[rows[decided]] = (dot[decided] > 0.0) if flip else (dot[decided] < 0.0)
-    certain[rows[decided]] = True
+    certain[rows[decided]] = proven
     undecided = rows[~decided]
     if len(undecided):
         out[undecided], certain[undecided] = winding(points[undecided], distance[undecided])
