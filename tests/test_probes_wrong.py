@@ -92,3 +92,82 @@ def test_pseudonormal_signs_of_a_solid_stay_certain_and_silent():
         warnings.simplefilter("error")
         r = mesh.signed([[1.0, 1.0, 1.9], [1.0, 1.0, 2.1]], sign="pseudonormal")
     assert r.certain.tolist() == [True, True] and r.contains.tolist() == [True, False]
+
+
+def _crossings(rng, n, scale):
+    """``n`` segments ``(n, 2, 3)`` and triangles ``(n, 3, 3)`` at ``scale``, each segment crossing
+    its triangle's open face (checked in rational arithmetic)."""
+    from proximity.numerics.orient import orient3d_fraction as orient
+
+    triangles = rng.normal(size=(n, 3, 3)) * scale
+    inner = np.einsum("ni,nij->nj", rng.dirichlet([1.0, 1.0, 1.0], size=n), triangles)
+    normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    direction = normal / np.linalg.norm(normal, axis=1)[:, None] + 0.5 * rng.normal(size=(n, 3))
+    reach = rng.uniform(0.2, 1.0, size=(n, 2, 1)) * scale
+    segments = np.stack([inner - reach[:, 0] * direction, inner + reach[:, 1] * direction], axis=1)
+    for (a0, a1), (v0, v1, v2) in zip(segments[:50], triangles[:50], strict=True):
+        assert orient(v0, v1, v2, a0) * orient(v0, v1, v2, a1) == -1
+        assert orient(a0, a1, v0, v1) == orient(a0, a1, v1, v2) == orient(a0, a1, v2, v0) != 0
+    return segments, triangles
+
+
+def _on_segment(point, segments, scale):
+    """Whether each point is within rounding of its segment (all ``(n, ...)``)."""
+    e = segments[:, 1] - segments[:, 0]
+    s = np.einsum("ij,ij->i", point - segments[:, 0], e) / np.einsum("ij,ij->i", e, e)
+    off = point - (segments[:, 0] + s[:, None] * e)
+    return (np.linalg.norm(off, axis=1) <= 1e-14 * scale) & (s >= 0.0) & (s <= 1.0)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_robust_segments_crossing_triangles_are_at_distance_zero_with_one_point(scale):
+    # The crossing candidate's point is rounded off the plane: 2,000 of 2,000
+    # crossings got a distance of 1e-17 to 7e-16 (times the scale) and two points.
+    rng = np.random.default_rng(7)
+    segments, triangles = _crossings(rng, 400, scale)
+    batch = proximity.closest_points(proximity.Segment(segments), proximity.Triangle(triangles))
+    assert (batch.distance == 0.0).all() and (batch.point_a == batch.point_b).all()
+    assert _on_segment(batch.point_a, segments, scale).all()
+    distances = proximity.distance(proximity.Segment(segments), proximity.Triangle(triangles))
+    np.testing.assert_array_equal(distances, 0.0)
+    swapped = proximity.closest_points(proximity.Triangle(triangles), proximity.Segment(segments))
+    assert (swapped.distance == 0.0).all()
+    np.testing.assert_array_equal(swapped.point_a, batch.point_b)
+    for k in range(20):
+        one = proximity.closest_points(proximity.Segment(segments[k]), proximity.Triangle(triangles[k]))
+        assert one.distance == 0.0 and (one.point_a == one.point_b).all()
+        np.testing.assert_array_equal(one.point_a, batch.point_a[k])
+        assert proximity.distance(proximity.Segment(segments[k]), proximity.Triangle(triangles[k])) == 0.0
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_robust_segments_and_capsules_crossing_a_mesh_are_at_distance_zero(scale):
+    mesh = proximity.TriangleMesh(SPHERE[0] * scale, SPHERE[1])
+    rng = np.random.default_rng(11)
+    out = rng.normal(size=(60, 3))
+    out /= np.linalg.norm(out, axis=1)[:, None]
+    # From near the centre to beyond the sphere: each crosses the surface.
+    segments = np.stack([0.3 * scale * rng.uniform(-1, 1, size=(60, 3)), 1.5 * scale * out], axis=1)
+    for a, b in ((proximity.Segment(segments), mesh), (mesh, proximity.Segment(segments))):
+        r = proximity.closest_points(a, b)
+        assert (r.distance == 0.0).all() and (r.point_a == r.point_b).all()
+        assert (proximity.distance(a, b) == 0.0).all()
+    radius = 0.01 * scale
+    capsules = proximity.Capsule(segments, radius)
+    assert (proximity.signed_distance(capsules, mesh) == -radius).all()
+    assert (proximity.signed_distance(mesh, capsules) == -radius).all()
+    for k in range(10):
+        one = proximity.Capsule(segments[k], radius)
+        assert proximity.distance(one, mesh) == 0.0 and proximity.signed_distance(one, mesh) == -radius
+        assert proximity.distance(proximity.Segment(segments[k]), mesh) == 0.0
+
+
+def test_robust_segments_that_miss_a_triangle_by_a_hair_keep_their_distance():
+    # Beside an edge by 1e-13, and ending 1e-13 short of the face: not crossings.
+    triangle = proximity.Triangle([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    beside = proximity.Segment([[0.5, -1e-13, -1.0], [0.5, -1e-13, 1.0]])
+    short = proximity.Segment([[0.25, 0.25, -1.0], [0.25, 0.25, -1e-13]])
+    for segment in (beside, short):
+        for method in METHODS:
+            d = proximity.distance(segment, triangle, method=method)
+            assert d == pytest.approx(1e-13, rel=1e-3)
