@@ -171,3 +171,49 @@ def test_robust_segments_that_miss_a_triangle_by_a_hair_keep_their_distance():
         for method in METHODS:
             d = proximity.distance(segment, triangle, method=method)
             assert d == pytest.approx(1e-13, rel=1e-3)
+
+
+@pytest.mark.parametrize("band", [None, 1.0])
+def test_a_grid_whose_corners_differ_by_more_than_the_float_range_has_its_points(band):
+    # np.linspace(-1e308, 1e308, n) overflows in upper - lower: its points were NaN, and so were
+    # 26 of the 27 signed distances, without a word.
+    import warnings
+
+    mesh = proximity.TriangleMesh(*meshes.box([0, 0, 0], [1, 1, 1]))
+    corners = [
+        ([-1e308] * 3, [1e308] * 3, (3, 3, 3)),
+        ([-1.7e308, 0, -1.7e308], [1.7e308, 1, 1e308], (5, 2, 4)),
+    ]
+    for low, high, shape in corners:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            grid = mesh.sdf_grid(low, high, shape, max_distance=band)
+        axes = [2.0 * np.linspace(lo / 2, hi / 2, n) for lo, hi, n in zip(low, high, shape, strict=True)]
+        assert [a[0] for a in axes] == low and [a[-1] for a in axes] == high
+        points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+        expected = np.asarray(mesh.signed_distance(points.reshape(-1, 3))).reshape(shape)
+        if band is not None:
+            expected = np.where(np.abs(expected) > band, np.copysign(np.inf, expected), expected)
+        assert not np.isnan(grid).any()
+        np.testing.assert_array_equal(grid, expected)
+    # Corners whose difference is finite keep np.linspace's points.
+    low, high = [-1e307, 0.0, 0.0], [1e307, 1.0, 1.0]
+    grid = mesh.sdf_grid(low, high, (3, 2, 2))
+    axes = [np.linspace(lo, hi, n) for lo, hi, n in zip(low, high, (3, 2, 2), strict=True)]
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    np.testing.assert_array_equal(grid.reshape(-1), mesh.signed_distance(points))
+
+
+def test_rounding_a_rounded_shape_past_the_float_range_is_refused_naming_the_radius():
+    # 1e308 + 1e308 is inf: Sphere(c, 1e308).inflated(1e308) took an infinite radius, which
+    # Sphere(c, inf) refuses.
+    message = r"radius must be finite: rounding a shape of radius 1e\+308 by 1e\+308 gives inf"
+    with pytest.raises(ValueError, match=message):
+        proximity.Sphere([0.0, 0.0, 0.0], 1e308).inflated(1e308)
+    with pytest.raises(ValueError, match=message + r" at index \(1,\)"):
+        proximity.Sphere([0.0, 0.0, 0.0], [1.0, 1e308]).inflated(1e308)
+    with pytest.raises(ValueError, match=message):  # through a posed view, whose queries add them
+        proximity.Sphere([0.0, 0.0, 0.0], 1e308).transformed(np.eye(4)).inflated(1e308)
+    with pytest.raises(ValueError, match="radius must be finite; got inf"):
+        proximity.Sphere([0.0, 0.0, 0.0], np.inf)
+    assert proximity.Sphere([0.0, 0.0, 0.0], 1e308).inflated(7e307).radius == 1e308 + 7e307

@@ -390,7 +390,8 @@ class TriangleMesh(Collection):
         shape : sequence of 3 int
             Points along x, y and z, ``(nx, ny, nz)``, each at least 1.  Point
             ``(i, j, k)`` is ``(x[i], y[j], z[k])`` with ``x = np.linspace(lower[0],
-            upper[0], nx)`` and so on.
+            upper[0], nx)`` and so on (``2 * np.linspace(lower[0] / 2, upper[0] / 2,
+            nx)`` where ``upper[0] - lower[0]`` overflows).
         max_distance : float, optional, keyword-only
             The narrow band: where the distance exceeds it, ``-inf`` inside
             and ``+inf`` outside, without computing the distance.  None

@@ -38,18 +38,31 @@ def _blocks(axis, n):
     first, last = axis[start], axis[stop - 1]
     centre = first * 0.5 + last * 0.5
     half = np.maximum(np.abs(last - centre), np.abs(centre - first))
-    return start, stop, centre, half * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(centre)
+    with np.errstate(over="ignore"):  # inf past the float range: the block is never skipped
+        return start, stop, centre, half * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(centre)
+
+
+def axis(low, high, n):
+    """``np.linspace(low, high, n)``; where ``high - low`` overflows, twice the points between
+    the halves, ``low / 2`` and ``high / 2`` (exact: such corners are far from underflow), the
+    points ``linspace`` would give without the overflow."""
+    with np.errstate(over="ignore"):
+        span = high - low
+    if np.isfinite(span):
+        return np.linspace(low, high, n)
+    return np.linspace(low * 0.5, high * 0.5, n) * 2.0
 
 
 def sdf_grid(mesh, low, high, shape, band, method, sign):
     """See :meth:`proximity.TriangleMesh.sdf_grid` (arguments validated there)."""
-    axes = [np.linspace(low[a], high[a], shape[a]) for a in range(3)]
+    axes = [axis(low[a], high[a], shape[a]) for a in range(3)]
     out = np.empty(shape)
     blocks = [_blocks(axes[a], shape[a]) for a in range(3)]
     centres = np.stack(np.meshgrid(*[b[2] for b in blocks], indexing="ij"), axis=-1)
     halves = np.stack(np.meshgrid(*[b[3] for b in blocks], indexing="ij"), axis=-1)
     n_blocks = centres.shape[:3]
-    radius = np.sqrt(np.sum(halves * halves, axis=-1)) * (1.0 + 4.0 * EPS)
+    with np.errstate(over="ignore"):  # a radius past the float range is inf: no block is skipped
+        radius = np.sqrt(np.sum(halves * halves, axis=-1)) * (1.0 + 4.0 * EPS)
 
     category = np.full(n_blocks, _OWN, np.int8)
     block_sign = np.ones(n_blocks)
@@ -61,7 +74,8 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
         flat = centres.reshape(-1, 3)
         d = np.asarray(mesh.distance(flat, method=method)).reshape(n_blocks)
         clear = d > radius
-        far = clear & (d - radius > band) if band is not None else np.zeros(n_blocks, dtype=bool)
+        with np.errstate(invalid="ignore"):  # inf - inf: not known to be far
+            far = clear & (d - radius > band) if band is not None else np.zeros(n_blocks, dtype=bool)
         if exact_side:
             rows = np.flatnonzero(clear.reshape(-1))
             _, _, inside, certain = mesh._signed(flat[rows], method, sign, warn=False)
@@ -131,11 +145,15 @@ def _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side):
         lo, hi = local[a][first], local[a][last]
         c = lo * 0.5 + hi * 0.5
         centre.append(c)
-        half.append(np.maximum(np.abs(hi - c), np.abs(c - lo)) * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(c))
+        with np.errstate(over="ignore"):
+            h = np.maximum(np.abs(hi - c), np.abs(c - lo)) * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(c)
+        half.append(h)
     centre = np.stack(centre, axis=-1)
-    radius = np.sqrt(sum(h * h for h in half)) * (1.0 + 4.0 * EPS)
+    with np.errstate(over="ignore"):  # inf past the float range: the block is never skipped
+        radius = np.sqrt(sum(h * h for h in half)) * (1.0 + 4.0 * EPS)
     d = np.asarray(mesh.distance(centre, method=method))
-    far = d - radius > band
+    with np.errstate(invalid="ignore"):  # inf - inf: not known to be far
+        far = d - radius > band
     if not far.any():
         return
     # The side of each far block: its points' block's where that is known (a clear
