@@ -13,7 +13,6 @@ every face, and why that never changes the answer, is in
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -457,7 +456,7 @@ class TriangleMesh(Collection):
             raise ValueError(f"shape must be 3 integers >= 1; got {shape!r}")
         band = None if max_distance is None else cutoff(max_distance)
         if sign != "winding" and self.validity.closed:
-            self._sign_plan(sign, stacklevel=3)  # its warning, once for the grid's many queries
+            self._sign_plan(sign, stacklevel=4)  # its warning, once for the grid's many queries
         from ..signs import grid
 
         return grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)
@@ -567,36 +566,10 @@ class TriangleMesh(Collection):
             object.__setattr__(self, "_signs", state)  # a cache: the mesh does not change
         return state
 
-    def _sign_plan(self, sign, warn=True, stacklevel=4):
-        """``(state, use_winding, proven)`` of a signed query with ``sign`` (validated): the sign
-        tables (None for the winding number), whether the winding number tells the sides, and
-        whether a side the pseudonormal decides is proven (it is not on a mesh that is not a
-        solid).  Raises where the sign cannot be had; with ``warn``, warns where the mesh is not
-        a solid: each time for ``"pseudonormal"``, whose answer can be wrong there, once per mesh
-        for ``"auto"``, whose answer is right but slower."""
-        if sign == "winding":
-            return None, True, True
-        state = self._sign_state()
-        v = state.validity
-        if not v.closed or (sign == "pseudonormal" and state.signs is None):
-            kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
-            raise ValueError(
-                f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
-                "sign='winding' works on any mesh"
-            )
-        if v.solid:
-            return state, False, True
-        use_winding = sign == "auto" or state.signs is None
-        if warn and (not use_winding or not state.warned):
-            if use_winding:
-                state.warned = True
-                then = "the signs use the winding number instead (exact, slower)"
-            else:
-                then = ("the pseudonormal signs can be wrong, and are not certain; sign='auto' or 'winding' "
-                        "are right")  # fmt: skip
-            warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
-                          stacklevel=stacklevel)  # fmt: skip
-        return state, use_winding, False  # the pseudonormal proves no side of a mesh that is not a solid
+    def _sign_plan(self, sign, warn=True, stacklevel=5):
+        """:func:`proximity.signs.signed.plan` of a signed query with ``sign`` on this mesh."""
+        state = None if sign == "winding" else self._sign_state()
+        return lazy.load("proximity.signs.signed").plan(state, sign, warn, stacklevel)
 
     def _signed(self, points, method, sign, max_distance=None, warn=True):
         """``(output shape, distances (n,), inside (n,), certain (n,))`` for

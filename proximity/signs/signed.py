@@ -32,6 +32,8 @@ and are used only where :mod:`proximity.signs.validity` finds that the mesh
 bounds a solid (flipped where its faces point inwards).
 """
 
+import warnings
+
 import numba
 import numpy as np
 
@@ -206,6 +208,38 @@ def feature_rows(signs, faces, face, feature):
     # Features the mesh has none of (NONE, or a code that is not a triangle's) decide nothing.
     row = np.where((k >= VERTEX0) & (k <= FACE), row, len(signs.table) - 1)
     return row, anchor
+
+
+def plan(state, sign, warn=True, stacklevel=4):
+    """``(state, use_winding, proven)`` of a signed query with ``sign`` (validated) on a mesh of
+    sign state ``state`` (its validity, pseudonormal tables and ``warned``; None for
+    ``"winding"``): whether the winding number tells the sides, and whether a side the
+    pseudonormal decides is proven (not on a mesh that is not a solid).  Raises where the sign
+    cannot be had; with ``warn``, warns where the mesh is not a solid: at every query for
+    ``"pseudonormal"``, whose sides can be wrong there, once per mesh for ``"auto"``, whose
+    sides are right (the winding number's) but slower."""
+    if sign == "winding":
+        return None, True, True
+    v = state.validity
+    if not v.closed or (sign == "pseudonormal" and state.signs is None):
+        kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
+        raise ValueError(
+            f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
+            "sign='winding' works on any mesh"
+        )
+    if v.solid:
+        return state, False, True
+    use_winding = sign == "auto"
+    if warn and (not use_winding or not state.warned):
+        if use_winding:
+            state.warned = True
+            then = "the signs use the winding number instead (exact, slower)"
+        else:
+            then = ("the pseudonormal signs can be wrong, and are not certain; sign='auto' or 'winding' "
+                    "are right")  # fmt: skip
+        warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
+                      stacklevel=stacklevel)  # fmt: skip
+    return state, use_winding, False  # the pseudonormal proves no side of a mesh that is not a solid
 
 
 def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding, proven=True):
