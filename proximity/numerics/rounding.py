@@ -19,7 +19,22 @@ def total_radius(radii):
     between two roundings changes nothing."""
     total = None
     for r in reversed(radii):
-        total = r if total is None else total + r
+        total = r if total is None else added_radii(total, r)
+    return total
+
+
+def added_radii(inner, outer):
+    """``inner + outer``, the radius of a rounded shape rounded again; a ValueError naming the
+    radius where the sum overflows to infinity (each radius is finite)."""
+    with np.errstate(over="ignore"):
+        total = np.add(inner, outer)
+    if not np.isfinite(total).all():
+        inner, outer, total = np.broadcast_arrays(inner, outer, total)
+        index = tuple(int(i) for i in np.argwhere(~np.isfinite(total))[0])
+        raise ValueError(
+            f"radius must be finite: rounding a shape of radius {inner[index]} by {outer[index]} gives "
+            f"{total[index]} at index {index}"
+        )
     return total
 
 

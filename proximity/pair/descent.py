@@ -27,9 +27,10 @@ least computed answer over all pairs of primitives, ties to the lowest
 ``(index_a, index_b)``, as brute force does.  Two points of the sides
 (one per node) bound the answer from above from the first levels on.  One
 exception, for speed: a search without rounded rows stops at the first
-pair found at distance 0 (no pair can be nearer), which need not be the
-lowest such pair.  Intersecting primitives rarely compute to exactly 0
-(the crossing point is rounded), so the robust search certifies a pair it
+pair found at distance 0 (no pair can be nearer: its ``d - r`` is
+``-(r_a + r_b)``, the sides' radii), which need not be the lowest such
+pair.  Intersecting primitives rarely compute to exactly 0 (the crossing
+point is rounded), so the robust search certifies a pair it
 finds within ``64 eps M`` of 0: where it certainly intersects, its answer
 is the certified one, exactly 0 with the crossing point on both sides, and
 the search stops there too.
@@ -207,7 +208,8 @@ def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, w
                 # distance is exactly 0 and the search ends (see the module docstring).
                 c = TOUCHING(A.kinds[ka], A.params, ka, B.kinds[kb], tb, 0, r[9], r[10])
                 if c[0] == certified.CERTAIN and c[1] == 0.0:
-                    _win(fs, ist, win, c, 0.0, ra, rb, ia, ib, ka, kb)
+                    # The cores cross: d - r is -(r_a + r_b), the least any pair can give.
+                    _win(fs, ist, win, c, 0.0 - radius, ra, rb, ia, ib, ka, kb)
                     ist[5] |= 1
                     return
         if e < fs[0] or (e == fs[0] and (ia < ist[0] or (ia == ist[0] and ib < ist[1]))):
@@ -222,8 +224,9 @@ def _consider(r, ka, kb, row_ra, row_rb, q, A, B, queries, magnitude, fs, ist, w
             # Possibly touching: certified now, and a certain 0 ends the search.
             c = CERTIFY(A.kinds[ka], A.params, ka, B.kinds[kb], tb, 0)
             if c[0] == certified.CERTAIN and c[1] == 0.0:
-                fs[1] = 0.0
-                _win(fs, ist, win, c, 0.0, ra, rb, ia, ib, ka, kb)
+                # d is exactly 0: d - r is -(r_a + r_b), correctly rounded, and no pair is less.
+                fs[1] = 0.0 - radius
+                _win(fs, ist, win, c, 0.0 - radius, ra, rb, ia, ib, ka, kb)
                 ist[5] |= 1
                 return
         n = ist[4]

@@ -46,10 +46,21 @@ against an edge (three segment-segment queries), the document's reduction.
     both witnesses.  ``tests/test_pair_kernels.py`` checks this against
     exact rational arithmetic.
 
+    * A crossing is exactly 0.  The crossing candidate's point is rounded
+      off the plane, so an answer within ``32 eps S`` of 0 (and not 0) is
+      decided by the exact orientation predicates of
+      :mod:`proximity.numerics.orient` on the inputs (a float filter first):
+      where the segment's endpoints lie strictly on either side of the
+      plane and its line strictly inside the three edges, the answer is
+      the crossing candidate at distance 0, its point on the segment as
+      both witnesses, the face as the triangle's feature (inputs whose
+      differences exceed :data:`CROSS_MAX` keep the candidates' answer).
+
 ``robust_unscaled``
     :func:`robust` without its scaling, bit for bit its answer wherever the
-    differences lie in the safe window, which it reports: the SIMD pass of
-    a batch loop, the rest redone with :func:`robust`.
+    differences lie in the safe window and the answer is not within rounding
+    of a crossing, which it reports: the SIMD pass of a batch loop, the rest
+    redone with :func:`robust`.
 
 ``certified``
     The robust answer names a feature pair; the optimality conditions of
@@ -80,7 +91,8 @@ import math
 
 from ..features import EDGE01, EDGE12, EDGE20, FACE, NONE, VERTEX0, VERTEX1, VERTEX2
 from ..numerics import certified as cf
-from ..numerics.fp import SAFE_MAX, SAFE_MIN, UNSCALED, cross_accurate, dot3_accurate, pow2_scale
+from ..numerics.fp import EPS, SAFE_MAX, SAFE_MIN, UNSCALED, cross_accurate, dot3_accurate, pow2_scale
+from ..numerics.orient import DOUBT, orient3d
 from ..point.segment import project
 from ..point.triangle import _robust_local as _point_local
 from ..runtime.jit import inline, part
@@ -98,6 +110,13 @@ from .segment_segment import (
 
 F_VERTEX0, F_VERTEX1, F_VERTEX2 = float(VERTEX0), float(VERTEX1), float(VERTEX2)
 F_EDGE01, F_EDGE12, F_EDGE20 = float(EDGE01), float(EDGE12), float(EDGE20)
+F_FACE = float(FACE)
+#: ``(32 eps)^2``: a squared distance at most this times ``S^2`` may be a crossing (whose
+#: robust distance is within ``16 eps S`` of 0), which is then decided exactly.
+NEAR = (32.0 * EPS) ** 2
+#: The largest coordinate difference at which the orientation predicates are taken on the
+#: inputs: their products of three differences stay far from overflow.
+CROSS_MAX = 2.0**256
 
 
 @inline
@@ -230,6 +249,40 @@ def _robust_local(e, w0, w1, g):
     return _pick(c[0] < best[0], c, best)
 
 
+@part
+def _crosses(a0, a1, v0, v1, v2):
+    """Whether the segment ``A0 A1`` certainly crosses the open triangle ``V0 V1 V2``, by
+    exact orientation predicates on the inputs (a float filter first): its endpoints strictly
+    on either side of the plane, its line strictly inside the three edges.  False where a
+    predicate is 0 (touching, coplanar) or doubtful (see :data:`~proximity.numerics.orient.DOUBT`)."""
+    below0 = orient3d(*v0, *v1, *v2, *a0)
+    below1 = orient3d(*v0, *v1, *v2, *a1)
+    if below0 == DOUBT or below1 == DOUBT or below0 * below1 != -1:
+        return False
+    o0 = orient3d(*a0, *a1, *v0, *v1)
+    if o0 == 0 or o0 == DOUBT:
+        return False
+    return orient3d(*a0, *a1, *v1, *v2) == o0 and orient3d(*a0, *a1, *v2, *v0) == o0
+
+
+@inline
+def _clear(sqr, m):
+    """Whether a squared distance ``sqr`` is 0 or beyond the rounding of a crossing, ``m``
+    the largest difference (the same units)."""
+    return (sqr == 0.0) | (sqr > NEAR * m * m)
+
+
+@inline
+def _crossing_zero(r, e, w0, w1, g, a0, a1, v0, v1, v2):
+    """The answer ``r`` of :func:`_robust_local`, or where it is within rounding of 0 and the
+    segment certainly crosses the face, the crossing candidate at distance exactly 0: the
+    segment's point where it meets the plane as both witnesses."""
+    if not _clear(r[0], _largest(e, w0, w1, g)) and _crosses(a0, a1, v0, v1, v2):
+        c = _crossing_candidate(e, w0, w1, g)
+        return (0.0, 0.0, c[2], c[3], c[4], c[2], c[3], c[4], c[8], F_FACE, c[10], c[11], c[12])
+    return r
+
+
 @inline
 def _finish(r, g, a0, a1, v0, v1, v2):
     """Undo the scaling ``g``, make the witnesses absolute (vertices exactly)
@@ -263,6 +316,7 @@ def robust(a0x, a0y, a0z, a1x, a1y, a1z, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y,
     v0, v1, v2 = (v0x, v0y, v0z), (v1x, v1y, v1z), (v2x, v2y, v2z)
     e, w0, w1, g = _differences(1.0, a0, a1, v0, v1, v2)
     m = _largest(e, w0, w1, g)
+    decide = m <= CROSS_MAX  # whether a crossing is decided exactly
     scale = UNSCALED  # undoes the scaling of the differences
     if m > 1.7e308:
         # A difference of two finite coordinates overflowed: quarter first.
@@ -278,19 +332,26 @@ def robust(a0x, a0y, a0z, a1x, a1y, a1z, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y,
         w1 = (_scaled(w1[0], f1, f2), _scaled(w1[1], f1, f2), _scaled(w1[2], f1, f2))
         g = (_scaled(g[0], f1, f2), _scaled(g[1], f1, f2), _scaled(g[2], f1, f2))
         scale = (scale[0] / f1 / f2, scale[1] / f1, 1.0 / f2)
-    return _finish(_robust_local(e, w0, w1, g), scale, a0, a1, v0, v1, v2)
+    r = _robust_local(e, w0, w1, g)
+    if decide:
+        r = _crossing_zero(r, e, w0, w1, g, a0, a1, v0, v1, v2)
+    return _finish(r, scale, a0, a1, v0, v1, v2)
 
 
 @inline
 def robust_unscaled(a0x, a0y, a0z, a1x, a1y, a1z, v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z):
     """:func:`robust` without its scaling, for the SIMD pass of a batch loop:
-    ``(in_window, distance, ...)`` as :func:`.segment_segment.robust_unscaled`."""
+    ``(in_window, distance, ...)`` as :func:`.segment_segment.robust_unscaled`; an answer
+    within rounding of a crossing is reported outside the window too, for :func:`robust`
+    to decide the crossing exactly."""
     a0, a1 = (a0x, a0y, a0z), (a1x, a1y, a1z)
     v0, v1, v2 = (v0x, v0y, v0z), (v1x, v1y, v1z), (v2x, v2y, v2z)
     e, w0, w1, g = _differences(1.0, a0, a1, v0, v1, v2)
     m = _largest(e, w0, w1, g)
-    r = _finish(_robust_local(e, w0, w1, g), UNSCALED, a0, a1, v0, v1, v2)
-    return (m >= SAFE_MIN) & (m <= SAFE_MAX), *r
+    r = _robust_local(e, w0, w1, g)
+    clear = _clear(r[0], m)
+    r = _finish(r, UNSCALED, a0, a1, v0, v1, v2)
+    return (m >= SAFE_MIN) & (m <= SAFE_MAX) & clear, *r
 
 
 # -- certified -----------------------------------------------------------------

@@ -13,7 +13,6 @@ every face, and why that never changes the answer, is in
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -210,9 +209,10 @@ class TriangleMesh(Collection):
         Warns
         -----
         RuntimeWarning
-            Once per mesh, where ``sign="auto"`` turns to the winding number
-            (or ``sign="pseudonormal"`` is asked on a mesh that is not a
-            solid), saying why (see :attr:`validity`).
+            Where the mesh is not a solid, saying why (see :attr:`validity`):
+            at every query with ``sign="pseudonormal"``, whose signs can be
+            wrong there (and are not :meth:`signed`'s ``certain``); once per
+            mesh where ``sign="auto"`` turns to the winding number.
 
         Notes
         -----
@@ -341,8 +341,10 @@ class TriangleMesh(Collection):
         product clears its bound of rounding errors, or the winding
         number's bound keeps it on one side of 1/2.  It is False on the
         surface (distance 0), within rounding of it, on a mesh with holes
-        where the winding number is within its bound of 1/2, and where the
-        point is not finite.
+        where the winding number is within its bound of 1/2, where the
+        point is not finite, and where ``sign="pseudonormal"`` decides on a
+        mesh that is not a solid (:attr:`validity`), whose pseudonormals
+        prove nothing.
 
         Examples
         --------
@@ -387,7 +389,8 @@ class TriangleMesh(Collection):
         shape : sequence of 3 int
             Points along x, y and z, ``(nx, ny, nz)``, each at least 1.  Point
             ``(i, j, k)`` is ``(x[i], y[j], z[k])`` with ``x = np.linspace(lower[0],
-            upper[0], nx)`` and so on.
+            upper[0], nx)`` and so on (``2 * np.linspace(lower[0] / 2, upper[0] / 2,
+            nx)`` where ``upper[0] - lower[0]`` overflows).
         max_distance : float, optional, keyword-only
             The narrow band: where the distance exceeds it, ``-inf`` inside
             and ``+inf`` outside, without computing the distance.  None
@@ -452,6 +455,8 @@ class TriangleMesh(Collection):
         if counts.shape != (3,) or counts.dtype.kind not in "iu" or (counts < 1).any():
             raise ValueError(f"shape must be 3 integers >= 1; got {shape!r}")
         band = None if max_distance is None else cutoff(max_distance)
+        if sign != "winding" and self.validity.closed:
+            self._sign_plan(sign, stacklevel=4)  # its warning, once for the grid's many queries
         from ..signs import grid
 
         return grid.sdf_grid(self, low, high, tuple(int(c) for c in counts), band, method, sign)
@@ -561,36 +566,20 @@ class TriangleMesh(Collection):
             object.__setattr__(self, "_signs", state)  # a cache: the mesh does not change
         return state
 
-    def _signed(self, points, method, sign, max_distance=None):
+    def _sign_plan(self, sign, warn=True, stacklevel=5):
+        """:func:`proximity.signs.signed.plan` of a signed query with ``sign`` on this mesh."""
+        state = None if sign == "winding" else self._sign_state()
+        return lazy.load("proximity.signs.signed").plan(state, sign, warn, stacklevel)
+
+    def _signed(self, points, method, sign, max_distance=None, warn=True):
         """``(output shape, distances (n,), inside (n,), certain (n,))`` for
         :meth:`signed_distance`; rows beyond ``max_distance`` at an infinite
-        distance, their side from the winding number."""
+        distance, their side from the winding number.  ``warn``: as :meth:`_sign_plan`
+        (False where the caller has warned for its query)."""
         one_of(sign, "sign", SIGNS)
         cut = cutoff(max_distance)
         _signed = lazy.load("proximity.signs.signed")
-
-        use_winding = sign == "winding"
-        state = None
-        if not use_winding:
-            state = self._sign_state()
-            v = state.validity
-            if not v.closed or (sign == "pseudonormal" and state.signs is None):
-                kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
-                raise ValueError(
-                    f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
-                    "sign='winding' works on any mesh"
-                )
-            if not v.solid:
-                if not state.warned:
-                    state.warned = True
-                    then = (
-                        "the signs use the winding number instead (exact, slower)"
-                        if sign == "auto" or state.signs is None
-                        else "the pseudonormal signs can be wrong; sign='auto' or 'winding' are right"
-                    )
-                    warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
-                                  stacklevel=3)  # fmt: skip
-                use_winding = sign == "auto" or state.signs is None
+        state, use_winding, proven = self._sign_plan(sign, warn)
         if use_winding:
             distance = np.asarray(self.distance(points, method=method, max_distance=max_distance))
             out_shape = distance.shape
@@ -608,7 +597,7 @@ class TriangleMesh(Collection):
         near |= np.isnan(distance)
         inside, certain = _signed.inside(
             state.signs, self.vertices, state.faces, flat[near], face[near], feature[near], distance[near],
-            flip=state.validity.inverted, winding=self._winding_sides,
+            flip=state.validity.inverted, winding=self._winding_sides, proven=proven,
         )  # fmt: skip
         if near.all():
             return out_shape, distance, inside, certain

@@ -41,7 +41,14 @@ from .. import primitives
 from .._typing import ArrayLike, Bools, Distances, Floats
 from .._validate import broadcast_batch, cutoff, freeze_result, frozen_float64, require_finite
 from ..features import FACE
-from ..numerics.rounding import certify_difference, outward, spindle_points, surface_points
+from ..numerics.rounding import (
+    added_radii,
+    certify_difference,
+    outward,
+    spindle_points,
+    surface_points,
+    total_radius,
+)
 from ..results import asdict, beyond, format_repr
 from .base import DEFAULT_METHOD, VIEWS, Circle, Frozen, Point, Segment, check_method, keyword_only
 
@@ -99,11 +106,22 @@ class Inflated(Frozen):
             raise ValueError(f"radius must be >= 0; got {r[index]} at index {index}")
         if isinstance(core, Inflated):
             # Rounding a rounded shape adds the radii (in floating point).
-            r = frozen_float64(core.radius + r, "radius", "(...)")
+            r = frozen_float64(added_radii(core.radius, r), "radius", "(...)")
             core = core.core
         batch = broadcast_batch(
             [("core", core.batch_shape), ("radius", r.shape)], "the batch dimensions of core and radius"
         )
+        # Below a posed view the radii are added by the queries that see through it: their sum
+        # must be finite too.
+        radii, inner, posed = [r], core, VIEWS.get("posed", Inflated)
+        while isinstance(inner, (posed, Inflated)):
+            if isinstance(inner, Inflated):
+                radii.append(inner.radius)
+                inner = inner.core
+            else:
+                inner = inner.shape
+        if len(radii) > 1:
+            total_radius(radii)
         self._init(core=core, radius=r, batch_shape=batch, dim=core.dim)
 
     @property

@@ -38,18 +38,31 @@ def _blocks(axis, n):
     first, last = axis[start], axis[stop - 1]
     centre = first * 0.5 + last * 0.5
     half = np.maximum(np.abs(last - centre), np.abs(centre - first))
-    return start, stop, centre, half * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(centre)
+    with np.errstate(over="ignore"):  # inf past the float range: the block is never skipped
+        return start, stop, centre, half * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(centre)
+
+
+def axis(low, high, n):
+    """``np.linspace(low, high, n)``; where ``high - low`` overflows, twice the points between
+    the halves, ``low / 2`` and ``high / 2`` (exact: such corners are far from underflow), the
+    points ``linspace`` would give without the overflow."""
+    with np.errstate(over="ignore"):
+        span = high - low
+    if np.isfinite(span):
+        return np.linspace(low, high, n)
+    return np.linspace(low * 0.5, high * 0.5, n) * 2.0
 
 
 def sdf_grid(mesh, low, high, shape, band, method, sign):
     """See :meth:`proximity.TriangleMesh.sdf_grid` (arguments validated there)."""
-    axes = [np.linspace(low[a], high[a], shape[a]) for a in range(3)]
+    axes = [axis(low[a], high[a], shape[a]) for a in range(3)]
     out = np.empty(shape)
     blocks = [_blocks(axes[a], shape[a]) for a in range(3)]
     centres = np.stack(np.meshgrid(*[b[2] for b in blocks], indexing="ij"), axis=-1)
     halves = np.stack(np.meshgrid(*[b[3] for b in blocks], indexing="ij"), axis=-1)
     n_blocks = centres.shape[:3]
-    radius = np.sqrt(np.sum(halves * halves, axis=-1)) * (1.0 + 4.0 * EPS)
+    with np.errstate(over="ignore"):  # a radius past the float range is inf: no block is skipped
+        radius = np.sqrt(np.sum(halves * halves, axis=-1)) * (1.0 + 4.0 * EPS)
 
     category = np.full(n_blocks, _OWN, np.int8)
     block_sign = np.ones(n_blocks)
@@ -61,10 +74,11 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
         flat = centres.reshape(-1, 3)
         d = np.asarray(mesh.distance(flat, method=method)).reshape(n_blocks)
         clear = d > radius
-        far = clear & (d - radius > band) if band is not None else np.zeros(n_blocks, dtype=bool)
+        with np.errstate(invalid="ignore"):  # inf - inf: not known to be far
+            far = clear & (d - radius > band) if band is not None else np.zeros(n_blocks, dtype=bool)
         if exact_side:
             rows = np.flatnonzero(clear.reshape(-1))
-            _, _, inside, certain = mesh._signed(flat[rows], method, sign)
+            _, _, inside, certain = mesh._signed(flat[rows], method, sign, warn=False)
             sure = np.zeros(n_blocks, dtype=bool)
             sure.reshape(-1)[rows] = certain
             block_sign.reshape(-1)[rows] = np.where(inside, -1.0, 1.0)
@@ -95,7 +109,7 @@ def sdf_grid(mesh, low, high, shape, band, method, sign):
             if kind == _CLEAR:
                 value = np.asarray(mesh.distance(points, method=method)) * sides[index]
             elif kind == _OWN:
-                _, distance, inside, _ = mesh._signed(points, method, sign)
+                _, distance, inside, _ = mesh._signed(points, method, sign, warn=False)
                 value = np.where(inside, -distance, distance)
             else:
                 inside = _sides(mesh, points, method, sign)
@@ -131,11 +145,15 @@ def _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side):
         lo, hi = local[a][first], local[a][last]
         c = lo * 0.5 + hi * 0.5
         centre.append(c)
-        half.append(np.maximum(np.abs(hi - c), np.abs(c - lo)) * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(c))
+        with np.errstate(over="ignore"):
+            h = np.maximum(np.abs(hi - c), np.abs(c - lo)) * (1.0 + 4.0 * EPS) + 4.0 * EPS * np.abs(c)
+        half.append(h)
     centre = np.stack(centre, axis=-1)
-    radius = np.sqrt(sum(h * h for h in half)) * (1.0 + 4.0 * EPS)
+    with np.errstate(over="ignore"):  # inf past the float range: the block is never skipped
+        radius = np.sqrt(sum(h * h for h in half)) * (1.0 + 4.0 * EPS)
     d = np.asarray(mesh.distance(centre, method=method))
-    far = d - radius > band
+    with np.errstate(invalid="ignore"):  # inf - inf: not known to be far
+        far = d - radius > band
     if not far.any():
         return
     # The side of each far block: its points' block's where that is known (a clear
@@ -146,7 +164,7 @@ def _refine(mesh, local, cat, sides, flat, band, method, sign, exact_side):
     side[group[clear_side]] = sides[todo[clear_side]]
     ask = np.flatnonzero(far & (side == 0.0))
     if exact_side and len(ask):
-        _, _, inside, certain = mesh._signed(centre[ask], method, sign)
+        _, _, inside, certain = mesh._signed(centre[ask], method, sign, warn=False)
         side[ask[certain]] = np.where(inside[certain], -1.0, 1.0)
     done = far[group] & (side[group] != 0.0)
     flat[todo[done]] = np.inf * side[group[done]]
@@ -167,5 +185,5 @@ def _sides(mesh, points, method, sign):
     if sign == "winding" or (sign == "auto" and not mesh.validity.solid):
         inside, _ = mesh._winding_sides(points, np.ones(len(points)))
         return inside
-    _, _, inside, _ = mesh._signed(points, method, sign)
+    _, _, inside, _ = mesh._signed(points, method, sign, warn=False)
     return inside

@@ -32,6 +32,8 @@ and are used only where :mod:`proximity.signs.validity` finds that the mesh
 bounds a solid (flipped where its faces point inwards).
 """
 
+import warnings
+
 import numba
 import numpy as np
 
@@ -210,7 +212,39 @@ def feature_rows(signs, faces, face, feature):
     return row, anchor
 
 
-def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding):
+def plan(state, sign, warn=True, stacklevel=4):
+    """``(state, use_winding, proven)`` of a signed query with ``sign`` (validated) on a mesh of
+    sign state ``state`` (its validity, pseudonormal tables and ``warned``; None for
+    ``"winding"``): whether the winding number tells the sides, and whether a side the
+    pseudonormal decides is proven (not on a mesh that is not a solid).  Raises where the sign
+    cannot be had; with ``warn``, warns where the mesh is not a solid: at every query for
+    ``"pseudonormal"``, whose sides can be wrong there, once per mesh for ``"auto"``, whose
+    sides are right (the winding number's) but slower."""
+    if sign == "winding":
+        return None, True, True
+    v = state.validity
+    if not v.closed or (sign == "pseudonormal" and state.signs is None):
+        kind = "closed mesh" if sign == "auto" else "closed manifold mesh"
+        raise ValueError(
+            f"signed distance with sign={sign!r} needs a {kind}, and {v.reason}.  "
+            "sign='winding' works on any mesh"
+        )
+    if v.solid:
+        return state, False, True
+    use_winding = sign == "auto"
+    if warn and (not use_winding or not state.warned):
+        if use_winding:
+            state.warned = True
+            then = "the signs use the winding number instead (exact, slower)"
+        else:
+            then = ("the pseudonormal signs can be wrong, and are not certain; sign='auto' or 'winding' "
+                    "are right")  # fmt: skip
+        warnings.warn(f"this mesh does not bound a solid: {v.reason}; {then}", RuntimeWarning,
+                      stacklevel=stacklevel)  # fmt: skip
+    return state, use_winding, False  # the pseudonormal proves no side of a mesh that is not a solid
+
+
+def inside(signs, vertices, faces, points, face, feature, distance, *, flip, winding, proven=True):
     """``(inside, certain)``: whether each point is inside the closed mesh, and proven so.
 
     ``face``, ``feature`` and ``distance`` are the query's answer for
@@ -221,7 +255,9 @@ def inside(signs, vertices, faces, points, face, feature, distance, *, flip, win
     longest edge; inside is ``(P - V) . N < 0``, or ``> 0`` where ``flip``
     (a solid whose faces point inwards).  ``winding(points, distance)``
     decides the other points at a positive distance, returning ``(inside,
-    certain)``.  Rows at distance 0 or NaN are False in both.
+    certain)``.  Rows at distance 0 or NaN are False in both.  With ``proven`` False (a mesh
+    that is not a solid, where the pseudonormal's side can be wrong) no side it decides is
+    certain.
     """
     out = np.zeros(len(points), dtype=bool)
     certain = np.zeros(len(points), dtype=bool)
@@ -238,7 +274,7 @@ def inside(signs, vertices, faces, points, face, feature, distance, *, flip, win
         bound = normal[:, 3] * reach + MARGIN * (reach + signs.longest[f])
         decided = np.abs(dot) > bound
     out[rows[decided]] = (dot[decided] > 0.0) if flip else (dot[decided] < 0.0)
-    certain[rows[decided]] = True
+    certain[rows[decided]] = proven
     undecided = rows[~decided]
     if len(undecided):
         out[undecided], certain[undecided] = winding(points[undecided], distance[undecided])
