@@ -188,19 +188,10 @@ class _RoundedFast:
         row.setflags(False)
         return row
 
-    def closest_points(self, a, b):
-        """The :class:`PairResult` of ``a`` and ``b``, or None (see :meth:`run`)."""
-        row = self.run(a, b)
-        if row is None:
-            return None
-        result = _new(PairResult)
-        fields = result.__dict__
-        fields["distance"], fields["point_a"], fields["point_b"] = row[18], row[self.at_a], row[self.at_b]
-        fields[_LAZY] = fields[_PAIR] = (self, row, a, b)
-        return result
-
     def closer(self):
-        """``closest(a, b)``: :meth:`closest_points` with its constants bound."""
+        """``closest(a, b)``: the :class:`PairResult` of ``a`` and ``b``, or None where
+        :meth:`run` gives none; :meth:`run` and the result's assembly written out with their
+        constants bound (one call less on a path of about 2 us)."""
         fast = self.fast
         entry, width, swapped, reader = fast.entry, fast.width, fast.swapped, self
         at_a, at_b = self.at_a, self.at_b
