@@ -42,6 +42,7 @@ $(CORE_STAMP): $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m ruff check proximity adapters benchmarks tests
+	$(BIN)/python -m ruff format --check proximity adapters benchmarks tests
 	$(BIN)/python -m pytest proximity adapters tests benchmarks/test_benchmarks.py README.md
 
 # The oldest Numba that pyproject.toml accepts, in an environment of its own
