@@ -43,12 +43,13 @@ $(CORE_STAMP): $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m ruff check proximity adapters benchmarks tests
 	$(BIN)/python -m ruff format --check proximity adapters benchmarks tests
-	$(BIN)/python -m pytest proximity adapters tests benchmarks/test_benchmarks.py README.md
+	$(BIN)/python -m pytest -n 2 --dist loadfile proximity adapters tests benchmarks/test_benchmarks.py README.md
 
 # The oldest Numba that pyproject.toml accepts, in an environment of its own
 # (with the NumPy that Numba version takes): every path of every shape must
-# answer with the bits of the pinned Numba in .venv.  Both runs compile into
-# caches of their own, so that the job can run beside `make test`.
+# answer with the bits of the pinned Numba in .venv.  The pinned run uses the
+# kernels cached beside the sources (compiled by `make test` where it ran
+# first); the oldest Numba compiles into a cache of its own.
 NUMBA_FLOOR := $(shell sed -n 's/.*"numba>=\([0-9.]*\),.*/\1/p' pyproject.toml)
 FLOOR := .venv-numba-floor
 
@@ -56,7 +57,7 @@ numba-floor: $(STAMP)
 	rm -rf $(FLOOR)
 	$(PYTHON) -m venv $(FLOOR)
 	$(FLOOR)/bin/python -m pip install --quiet -e . "numba==$(NUMBA_FLOOR).*"
-	NUMBA_CACHE_DIR=$(FLOOR)/pinned-cache $(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
+	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
 	NUMBA_CACHE_DIR=$(FLOOR)/cache $(FLOOR)/bin/python -m proximity.testing.smoke $(FLOOR)/floor.npz \
 		--compare $(FLOOR)/pinned.npz
 
