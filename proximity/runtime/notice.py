@@ -32,20 +32,24 @@ QUIET = "PROXIMITY_QUIET"
 # What a first use compiles, from where its first kernel that misses the
 # cache is defined, and roughly how many seconds of one core the whole first
 # use compiles (the kernels of that use together, measured cold).
-# The first mesh or scene compiles its broad phase before it knows whether
-# it builds a hierarchy (more than four primitives), which compiles the most:
-# a 20,000-face mesh, about 3.3 s for the build and 2.1 to 2.2 s for its
-# first search.
+# Measured cold on a quiet 2-core machine, in new processes as the README's snippets run: the
+# first mesh answer (its hierarchy and first search) about 8 s with the imports; the first
+# signed distance about 15 s more (the predicates and the signs' checks, which the normals at a
+# face use alone in about 4 s); the first pair of meshes 20 to 30 s per pair of kinds (a
+# segment against a mesh 19 s, a mesh against a posed mesh 29 s, certified 45 s).
 _BROAD_PHASE = (
     "meshes and scenes (hierarchy build and nearest-face search)",
-    "a few seconds, about 5.5 s for a first hierarchy and its first search",
+    "about 8 s for a first mesh and its first answer",
 )
 _SIGNS = ("the winding number of signed distances", "about 1 s")
-# The exact predicates, compiled on their own first (proximity.numerics.orient.warm), for the
-# normals of points within rounding of a face (about 4 s with their sides' loop) and
-# the signs' checks and ray crossings.
-_PREDICATES = ("exact orientation predicates (of normals at a face, of the signs' checks)", "a few seconds")
-_PAIRS = ("pair queries (the pair kernels, the descent of two hierarchies)", "seconds to a minute")
+_PREDICATES = (
+    "exact orientation predicates (of normals at a face, of the signs' checks)",
+    "about 15 s with a first signed distance, 4 s for normals alone",
+)
+_PAIRS = (
+    "pair queries (the pair kernels, the descent of two hierarchies)",
+    "about 20 to 30 s for each pair of kinds, 45 s certified",
+)
 _SINGLE = ("one-point queries", "about 1 s")
 _BATCH = ("batch queries", "about 2 to 5 s")
 
