@@ -4,10 +4,12 @@ What the rounded shapes (:mod:`proximity.shapes.rounded`) and a collection of
 rounded primitives (:mod:`proximity.broadphase`) share.
 """
 
+import math
 from fractions import Fraction
 
 import numpy as np
 
+from ..runtime.jit import kernel
 from .normals import planar, plane_sides, surface_directions
 
 
@@ -86,6 +88,13 @@ def surface_points(p, c, d, r, rows_of):
     (``rows_of(flat rows) -> (kinds, params)`` gives the primitives there).
     That point is on the surface, and within ``2 d`` of the nearest one."""
     dim = p.shape[-1]
+    if dim == 3:
+        shape = np.broadcast_shapes(p.shape, c.shape, d.shape + (3,), np.shape(r) + (3,))
+        point, lost = np.empty(shape), np.empty(shape[:-1], np.bool_)
+        rows3 = lambda x: np.ascontiguousarray(np.broadcast_to(x, shape), np.float64).reshape(-1, 3)  # noqa: E731
+        rows1 = lambda x: np.ascontiguousarray(np.broadcast_to(x, shape[:-1]), np.float64).reshape(-1)  # noqa: E731
+        _surface_rows(rows3(p), rows3(c), rows1(d), rows1(r), point.reshape(-1, 3), lost.reshape(-1))
+        return _lost_rows(point, lost, p, c, d, r, rows_of, dim)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         # Along P - c normalised by its own length, not by d: an error of c
         # across the surface then moves the point by as much, where r / d
@@ -97,6 +106,35 @@ def surface_points(p, c, d, r, rows_of):
         point = np.where((r == 0)[..., None] | (p == c).all(axis=-1)[..., None], c, c + v * r[..., None])
         m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
         lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
+    return _lost_rows(point, lost, p, c, d, r, rows_of, dim)
+
+
+@kernel()
+def _surface_rows(p, c, d, r, point, lost):
+    """:func:`surface_points` of 3D rows, the same operations in the same order (so the same
+    bits) as its NumPy form, row by row; ``lost`` marks the rows it leaves to the core's normal."""
+    for i in range(p.shape[0]):
+        c0, c1, c2 = c[i, 0], c[i, 1], c[i, 2]
+        p0, p1, p2 = p[i, 0], p[i, 1], p[i, 2]
+        radius, di = r[i], d[i]
+        m = max(max(max(abs(c0), abs(c1)), abs(c2)), max(max(abs(p0), abs(p1)), abs(p2)))
+        m = max(m, radius)
+        lost[i] = di < radius and (di / m) * (di / m) < 64.0 * 2.0**-52 * (radius / m)
+        if radius == 0.0 or (p0 == c0 and p1 == c1 and p2 == c2):
+            point[i, 0], point[i, 1], point[i, 2] = c0, c1, c2
+            continue
+        v0, v1, v2 = p0 - c0, p1 - c1, p2 - c2
+        top = max(max(abs(v0), abs(v1)), abs(v2))
+        if v0 != v0 or v1 != v1 or v2 != v2:
+            top = np.nan  # as NumPy's max, which a NaN wins
+        v0, v1, v2 = v0 / top, v1 / top, v2 / top
+        length = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        v0, v1, v2 = v0 / length, v1 / length, v2 / length
+        point[i, 0], point[i, 1], point[i, 2] = c0 + v0 * radius, c1 + v1 * radius, c2 + v2 * radius
+
+
+def _lost_rows(point, lost, p, c, d, r, rows_of, dim):
+    """``point`` with the ``lost`` rows put along the core's normal on ``p``'s side."""
     rows = np.flatnonzero(lost.reshape(-1))
     if len(rows):
         flat_p, flat_c = p.reshape(-1, dim)[rows], c.reshape(-1, dim)[rows]
