@@ -231,3 +231,37 @@ def test_bad_input_names_the_argument(build, error, match):
 def test_segments_have_no_eberly_method():
     with pytest.raises(ValueError, match=r"method must be one of \('robust', 'certified'\); got 'eberly'"):
         proximity.Segment([[0, 0, 0], [1, 0, 0]]).distance([0, 1, 0], method="eberly")
+
+
+def test_compiled_surface_points_have_the_numpy_forms_bits():
+    """The compiled rows of 3D surface points against the NumPy form (any dimension), bit for
+    bit, on rows with NaNs, infinities, zeros, subnormals and points on or next to the core."""
+    from proximity.numerics import rounding
+
+    rng = np.random.default_rng(7)
+    n = 20_000
+    specials = np.array([np.nan, np.inf, -np.inf, 0.0, -0.0, 5e-324, 1e308, -1e308, 1e-300])
+
+    def column(shape):
+        x = rng.normal(size=shape) * 10.0 ** rng.integers(-20, 20, size=shape)
+        mask = rng.random(shape) < 0.05
+        x[mask] = rng.choice(specials, size=mask.sum())
+        return x
+
+    p, c = column((n, 3)), column((n, 3))
+    c[: n // 10] = p[: n // 10]  # on the core
+    c[n // 10 : n // 5] = p[n // 10 : n // 5] * (1 + 1e-16 * rng.normal(size=(n // 10, 3)))
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = np.linalg.norm(p - c, axis=-1)
+    # Not the rows' own distance: rows with NaN coordinates and a finite d.
+    d[n // 5 : n // 2] = np.abs(column(n // 2 - n // 5))
+    r = np.abs(column(n))
+    r[rng.random(n) < 0.1] = 0.0
+    point, lost = np.empty((n, 3)), np.empty(n, np.bool_)
+    rounding.surface_rows(p, c, d, r, point, lost)
+    expected, expected_lost = rounding.surface_numpy(p, c, d, r)
+    assert lost.any() and not lost.all()
+    np.testing.assert_array_equal(lost, expected_lost)
+    assert (np.isnan(point) == np.isnan(expected)).all()
+    finite = ~np.isnan(expected)
+    assert (point[finite].view(np.int64) == expected[finite].view(np.int64)).all()

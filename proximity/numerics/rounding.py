@@ -93,8 +93,15 @@ def surface_points(p, c, d, r, rows_of):
         point, lost = np.empty(shape), np.empty(shape[:-1], np.bool_)
         rows3 = lambda x: np.ascontiguousarray(np.broadcast_to(x, shape), np.float64).reshape(-1, 3)  # noqa: E731
         rows1 = lambda x: np.ascontiguousarray(np.broadcast_to(x, shape[:-1]), np.float64).reshape(-1)  # noqa: E731
-        _surface_rows(rows3(p), rows3(c), rows1(d), rows1(r), point.reshape(-1, 3), lost.reshape(-1))
-        return _lost_rows(point, lost, p, c, d, r, rows_of, dim)
+        surface_rows(rows3(p), rows3(c), rows1(d), rows1(r), point.reshape(-1, 3), lost.reshape(-1))
+    else:
+        point, lost = surface_numpy(p, c, d, r)
+    return _lost_rows(point, lost, p, c, d, r, rows_of, dim)
+
+
+def surface_numpy(p, c, d, r):
+    """``(point, lost)`` of :func:`surface_points` before its lost rows are placed, in NumPy
+    (any dimension; :func:`surface_rows` gives the same bits for 3D rows)."""
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         # Along P - c normalised by its own length, not by d: an error of c
         # across the surface then moves the point by as much, where r / d
@@ -106,11 +113,11 @@ def surface_points(p, c, d, r, rows_of):
         point = np.where((r == 0)[..., None] | (p == c).all(axis=-1)[..., None], c, c + v * r[..., None])
         m = np.maximum(np.maximum(np.max(np.abs(c), axis=-1), np.max(np.abs(p), axis=-1)), r)
         lost = (d < r) & ((d / m) ** 2 < 64.0 * 2.0**-52 * (r / m))
-    return _lost_rows(point, lost, p, c, d, r, rows_of, dim)
+    return point, lost
 
 
 @kernel()
-def _surface_rows(p, c, d, r, point, lost):
+def surface_rows(p, c, d, r, point, lost):
     """:func:`surface_points` of 3D rows, the same operations in the same order (so the same
     bits) as its NumPy form, row by row; ``lost`` marks the rows it leaves to the core's normal."""
     for i in range(p.shape[0]):
@@ -119,6 +126,8 @@ def _surface_rows(p, c, d, r, point, lost):
         radius, di = r[i], d[i]
         m = max(max(max(abs(c0), abs(c1)), abs(c2)), max(max(abs(p0), abs(p1)), abs(p2)))
         m = max(m, radius)
+        if m != m or c0 != c0 or c1 != c1 or c2 != c2 or p0 != p0 or p1 != p1 or p2 != p2 or radius != radius:
+            m = np.nan  # as NumPy's maximum, which a NaN wins
         lost[i] = di < radius and (di / m) * (di / m) < 64.0 * 2.0**-52 * (radius / m)
         if radius == 0.0 or (p0 == c0 and p1 == c1 and p2 == c2):
             point[i, 0], point[i, 1], point[i, 2] = c0, c1, c2
