@@ -126,7 +126,7 @@ def surface_rows(p, c, d, r, point, lost):
         radius, di = r[i], d[i]
         m = max(max(max(abs(c0), abs(c1)), abs(c2)), max(max(abs(p0), abs(p1)), abs(p2)))
         m = max(m, radius)
-        if m != m or c0 != c0 or c1 != c1 or c2 != c2 or p0 != p0 or p1 != p1 or p2 != p2 or radius != radius:
+        if c0 != c0 or c1 != c1 or c2 != c2 or p0 != p0 or p1 != p1 or p2 != p2 or radius != radius:
             m = np.nan  # as NumPy's maximum, which a NaN wins
         lost[i] = di < radius and (di / m) * (di / m) < 64.0 * 2.0**-52 * (radius / m)
         if radius == 0.0 or (p0 == c0 and p1 == c1 and p2 == c2):
