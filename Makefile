@@ -49,7 +49,7 @@ test: $(STAMP)
 # (with the NumPy that Numba version takes): every path of every shape must
 # answer with the bits of the pinned Numba in .venv.  The pinned run uses the
 # kernels cached beside the sources (compiled by `make test` where it ran
-# first); the oldest Numba compiles into a cache of its own.
+# first); the oldest Numba compiles into a cache of its own, on both cores.
 NUMBA_FLOOR := $(shell sed -n 's/.*"numba>=\([0-9.]*\),.*/\1/p' pyproject.toml)
 FLOOR := .venv-numba-floor
 
@@ -57,9 +57,9 @@ numba-floor: $(STAMP)
 	rm -rf $(FLOOR)
 	$(PYTHON) -m venv $(FLOOR)
 	$(FLOOR)/bin/python -m pip install --quiet -e . "numba==$(NUMBA_FLOOR).*"
-	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz
+	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz --jobs 2
 	NUMBA_CACHE_DIR=$(FLOOR)/cache $(FLOOR)/bin/python -m proximity.testing.smoke $(FLOOR)/floor.npz \
-		--compare $(FLOOR)/pinned.npz
+		--jobs 2 --compare $(FLOOR)/pinned.npz
 
 # A regular install byte-compiles the package; an editable one leaves that to
 # the first import, which does not write the result where PYTHONDONTWRITEBYTECODE
