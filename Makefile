@@ -9,7 +9,7 @@ CORE_STAMP := $(CORE)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
 PEERS_STAMP := $(VENV)/.installed-peers
 
-.PHONY: test bench bench-quick docs numba-floor clean clean-cache
+.PHONY: test bench bench-quick docs numba-floor numba-floor-env clean clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -53,10 +53,19 @@ test: $(STAMP)
 NUMBA_FLOOR := $(shell sed -n 's/.*"numba>=\([0-9.]*\),.*/\1/p' pyproject.toml)
 FLOOR := .venv-numba-floor
 
-numba-floor: $(STAMP)
+FLOOR_STAMP := $(FLOOR)/.installed
+
+$(FLOOR_STAMP): pyproject.toml
 	rm -rf $(FLOOR)
 	$(PYTHON) -m venv $(FLOOR)
 	$(FLOOR)/bin/python -m pip install --quiet -e . "numba==$(NUMBA_FLOOR).*"
+	touch $(FLOOR_STAMP)
+
+# The environment alone (CI makes it while the tests run).
+numba-floor-env: $(FLOOR_STAMP)
+
+numba-floor: $(STAMP) $(FLOOR_STAMP)
+	rm -rf $(FLOOR)/cache $(FLOOR)/pinned.npz $(FLOOR)/floor.npz
 	$(BIN)/python -m proximity.testing.smoke $(FLOOR)/pinned.npz --jobs 2
 	NUMBA_CACHE_DIR=$(FLOOR)/cache $(FLOOR)/bin/python -m proximity.testing.smoke $(FLOOR)/floor.npz \
 		--jobs 2 --compare $(FLOOR)/pinned.npz
