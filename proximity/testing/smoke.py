@@ -32,9 +32,9 @@ def _put(out, key, value):
 
 
 def _tasks(methods=None):
-    """The run as ``(name, task)`` pairs, ``task(out)`` putting that part's arrays in
-    ``out``: one per kind, dimension and method, per broad phase and method, per broad
-    phase's signed distances and per method of the scene; each seeds its own points."""
+    """The run as tasks, ``task(out)`` putting that part's arrays in ``out``: one per kind,
+    dimension and method (each with points of its own seed), per broad phase and method,
+    per broad phase's signed distances and per method of the scene."""
     tasks = []
     shapes = []
     for kind, dim in examples.kinds():
@@ -54,32 +54,30 @@ def _tasks(methods=None):
                 _put(out, f"{key}.one", one.closest_point(points, method=method))
                 _put(out, f"{key}.single", one.closest_point(points[0], method=method))
 
-            tasks.append((f"{kind}{dim}.{method}", task))
+            tasks.append(task)
     vertices, faces = icosphere(2)
-
-    def mesh_points():
-        return np.random.default_rng(1).normal(size=(3000, 3))
+    points = np.random.default_rng(len(tasks)).normal(size=(3000, 3))
 
     for broad_phase in ("bvh", "brute"):
         mesh = proximity.TriangleMesh(vertices, faces, broad_phase=broad_phase)
         for method in methods or mesh.methods:
 
             def task(out, mesh=mesh, method=method, key=f"mesh.{broad_phase}.{method}"):
-                _put(out, key, mesh.closest_point(mesh_points(), method=method))
+                _put(out, key, mesh.closest_point(points, method=method))
 
-            tasks.append((f"mesh.{broad_phase}.{method}", task))
+            tasks.append(task)
 
         def signed(out, mesh=mesh, key=f"mesh.{broad_phase}.signed"):
-            _put(out, key, mesh.signed_distance(mesh_points()))
+            _put(out, key, mesh.signed_distance(points))
 
-        tasks.append((f"mesh.{broad_phase}.signed", signed))
+        tasks.append(signed)
     scene = proximity.Scene([proximity.TriangleMesh(vertices, faces), *shapes])
     for method in methods or scene.methods:
 
         def task(out, method=method):
-            _put(out, f"scene.{method}", scene.closest_point(mesh_points(), method=method))
+            _put(out, f"scene.{method}", scene.closest_point(points, method=method))
 
-        tasks.append((f"scene.{method}", task))
+        tasks.append(task)
     return tasks
 
 
@@ -88,7 +86,7 @@ def answers(methods=None, part=0, parts=1):
     ``part`` of ``parts`` keeps every ``parts``-th task from the ``part``-th (see
     :func:`_tasks`), for a run split over processes."""
     out = {}
-    for _, task in _tasks(methods)[part::parts]:
+    for task in _tasks(methods)[part::parts]:
         task(out)
     return out
 
@@ -128,7 +126,8 @@ def _split(args):
         if failed:
             raise SystemExit(f"error: the smoke test's parts {failed} failed")
         for path in paths:
-            out.update(np.load(path))
+            with np.load(path) as answers_of_part:
+                out.update(answers_of_part)
     return out
 
 
